@@ -1,0 +1,30 @@
+//! Hybrid: packet traversal (see [`packet`](super::packet)) that hands an
+//! entry to single traversal once fewer than the threshold of its lanes are
+//! active, as Embree does for ray packets. Each active lane then finishes that
+//! entry's subtree on its own with 16 nodes in the lanes; the packet goes on
+//! with the rest of its stack, so coherent parts of the tree stay packeted.
+
+use super::test::{F32s, ReceiverLanes, for_each_lane};
+use super::{CutSink, Receiver, Traversal, TraversalStats, single};
+
+/// Finishes the subtree of `node` for each lane of `mask` with single traversal.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish<S: CutSink>(
+    t: &Traversal,
+    receivers: &[Receiver],
+    base: usize,
+    node: u32,
+    mask: u16,
+    scratch: &mut Vec<u32>,
+    sink: &mut S,
+    stats: &mut TraversalStats,
+) {
+    stats.switches += 1;
+    for_each_lane(mask, |l| {
+        let rec: ReceiverLanes<F32s> = receivers[l].lanes().splat();
+        scratch.clear();
+        scratch.push(node);
+        single::traverse_from(t, &rec, base + l, scratch, sink, stats);
+    });
+}

@@ -1,0 +1,91 @@
+//! Packet: 16 receivers in the lanes, one node at a time, depth first on a
+//! shared stack whose entries carry the mask of lanes still traversing (the
+//! paper's node queue and mask queue).
+
+use super::hybrid;
+use super::test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
+use super::{CutSink, Receiver, Traversal, TraversalStats};
+use crate::tree::{LEAF_BIT, MAX_DEPTH};
+
+/// Receivers `base..base + receivers.len()` (at most 16) as lanes; unused
+/// lanes repeat the first receiver and stay masked off.
+#[inline(always)]
+pub(crate) fn load_receivers(receivers: &[Receiver]) -> ReceiverLanes<F32s> {
+    debug_assert!(!receivers.is_empty() && receivers.len() <= LANES);
+    let mut f = [[0f32; LANES]; 6];
+    for l in 0..LANES {
+        let r = receivers.get(l).unwrap_or(&receivers[0]);
+        let (p, n) = (r.position(), r.normal());
+        for (j, v) in [p.x, p.y, p.z, n.x, n.y, n.z].into_iter().enumerate() {
+            f[j][l] = v;
+        }
+    }
+    ReceiverLanes {
+        px: F32s::from_array(f[0]),
+        py: F32s::from_array(f[1]),
+        pz: F32s::from_array(f[2]),
+        nx: F32s::from_array(f[3]),
+        ny: F32s::from_array(f[4]),
+        nz: F32s::from_array(f[5]),
+    }
+}
+
+/// Traverses for up to 16 receivers (`base` is the first one's index for the
+/// sink). With `HYBRID`, an entry with fewer than `t.hybrid_threshold` active
+/// lanes is handed to [`hybrid::finish`] instead.
+#[inline(always)]
+pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
+    t: &Traversal,
+    receivers: &[Receiver],
+    base: usize,
+    scratch: &mut Vec<u32>,
+    sink: &mut S,
+    stats: &mut TraversalStats,
+) {
+    let a = &t.tree.nodes;
+    if a.r.is_empty() {
+        return;
+    }
+    let recs = load_receivers(receivers);
+    let omega = F32s::splat(t.omega);
+    // Depth first, both children pushed: at most depth + 1 entries.
+    let mut nodes = [0u32; MAX_DEPTH + 2];
+    let mut masks = [0u16; MAX_DEPTH + 2];
+    masks[0] = lane_mask(receivers.len());
+    let mut sp = 1;
+    while sp > 0 {
+        sp -= 1;
+        let (k, mask) = (nodes[sp], masks[sp]);
+        let active = mask.count_ones();
+        if HYBRID && active < t.hybrid_threshold {
+            hybrid::finish(t, receivers, base, k, mask, scratch, sink, stats);
+            continue;
+        }
+        stats.node_tests += active as u64;
+        stats.active_lanes += active as u64;
+        stats.lane_slots += LANES as u64;
+
+        let node = load_node(a, k as usize).splat();
+        let child = a.child[k as usize];
+        let (discard, far) = classify(&node, &recs, omega);
+        let discard = discard.to_bitmask() as u16 & mask;
+        let kept = mask & !discard;
+        let (splat, traverse) = if child & LEAF_BIT != 0 {
+            (kept, 0)
+        } else {
+            let far = far.to_bitmask() as u16;
+            (kept & far, kept & !far)
+        };
+        for_each_lane(splat, |l| sink.splat(base + l, k));
+        if S::DISCARDS {
+            for_each_lane(discard, |l| sink.discard(base + l, k));
+        }
+        if traverse != 0 {
+            nodes[sp] = child + 1;
+            masks[sp] = traverse;
+            nodes[sp + 1] = child;
+            masks[sp + 1] = traverse;
+            sp += 2;
+        }
+    }
+}

@@ -1,0 +1,41 @@
+//! The scalar reference: one receiver, one node at a time, depth first with a
+//! fixed-size stack, the node test short-circuited. Every speed-up is measured
+//! against this, so it is kept as fast as plain scalar code gets.
+
+use super::test::{Outcome, ReceiverLanes, load_node, outcome_scalar};
+use super::{CutSink, Traversal};
+use crate::tree::{LEAF_BIT, MAX_DEPTH};
+
+/// Traverses for one receiver; returns the number of nodes tested.
+#[inline(always)]
+pub(crate) fn traverse<S: CutSink>(t: &Traversal, rec: &ReceiverLanes<f32>, index: usize, sink: &mut S) -> u64 {
+    let a = &t.tree.nodes;
+    if a.r.is_empty() {
+        return 0;
+    }
+    // Depth first, both children pushed: at most depth + 1 entries.
+    let mut stack = [0u32; MAX_DEPTH + 2];
+    let mut sp = 1;
+    let mut tests = 0;
+    while sp > 0 {
+        sp -= 1;
+        let k = stack[sp];
+        tests += 1;
+        let node = load_node(a, k as usize);
+        let child = a.child[k as usize];
+        match outcome_scalar(&node, rec, t.omega, child & LEAF_BIT != 0) {
+            Outcome::Discard => {
+                if S::DISCARDS {
+                    sink.discard(index, k);
+                }
+            }
+            Outcome::Splat => sink.splat(index, k),
+            Outcome::Traverse => {
+                stack[sp] = child + 1;
+                stack[sp + 1] = child;
+                sp += 2;
+            }
+        }
+    }
+    tests
+}

@@ -1,0 +1,258 @@
+//! The node test (the paper's three masks), written once over [`Real`] so the
+//! scalar reference and the 16-lane kernels run the same IEEE operations in
+//! the same order. Only `+ - * sqrt` and comparisons: no FMA contraction, no
+//! reciprocal estimates, so every path classifies every node identically.
+
+use std::ops::{Add, BitAnd, BitOr, Mul, Neg, Not, Sub};
+use std::simd::prelude::*;
+
+use crate::tree::NodeArrays;
+
+/// Lanes per kernel vector.
+pub const LANES: usize = 16;
+
+/// The vector type of the kernels.
+pub type F32s = Simd<f32, LANES>;
+/// Its mask type.
+pub type M32s = Mask<i32, LANES>;
+
+/// A scalar `f32` or a vector of them, with the few operations the node test uses.
+pub(crate) trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask> + Not<Output = Self::Mask>;
+    fn splat(x: f32) -> Self;
+    fn sqrt(self) -> Self;
+    fn le(self, o: Self) -> Self::Mask;
+    fn lt(self, o: Self) -> Self::Mask;
+}
+
+impl Real for f32 {
+    type Mask = bool;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> bool {
+        self <= o
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> bool {
+        self < o
+    }
+}
+
+impl Real for F32s {
+    type Mask = M32s;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Simd::splat(x)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        std::simd::StdFloat::sqrt(self)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> M32s {
+        self.simd_le(o)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> M32s {
+        self.simd_lt(o)
+    }
+}
+
+/// The node fields the test reads, for one node or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct NodeLanes<V> {
+    pub cx: V,
+    pub cy: V,
+    pub cz: V,
+    pub r: V,
+    pub ax: V,
+    pub ay: V,
+    pub az: V,
+    pub cos: V,
+    pub sin: V,
+}
+
+/// Receiver position and normal, for one receiver or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct ReceiverLanes<V> {
+    pub px: V,
+    pub py: V,
+    pub pz: V,
+    pub nx: V,
+    pub ny: V,
+    pub nz: V,
+}
+
+impl ReceiverLanes<f32> {
+    /// The same receiver in every lane.
+    #[inline(always)]
+    pub fn splat(&self) -> ReceiverLanes<F32s> {
+        ReceiverLanes {
+            px: F32s::splat(self.px),
+            py: F32s::splat(self.py),
+            pz: F32s::splat(self.pz),
+            nx: F32s::splat(self.nx),
+            ny: F32s::splat(self.ny),
+            nz: F32s::splat(self.nz),
+        }
+    }
+}
+
+impl NodeLanes<f32> {
+    /// The same node in every lane.
+    #[inline(always)]
+    pub fn splat(&self) -> NodeLanes<F32s> {
+        NodeLanes {
+            cx: F32s::splat(self.cx),
+            cy: F32s::splat(self.cy),
+            cz: F32s::splat(self.cz),
+            r: F32s::splat(self.r),
+            ax: F32s::splat(self.ax),
+            ay: F32s::splat(self.ay),
+            az: F32s::splat(self.az),
+            cos: F32s::splat(self.cos),
+            sin: F32s::splat(self.sin),
+        }
+    }
+}
+
+/// `v = c − x` and `d2 = v·v`.
+#[derive(Clone, Copy)]
+pub(crate) struct Offset<V> {
+    pub vx: V,
+    pub vy: V,
+    pub vz: V,
+    pub d2: V,
+}
+
+#[inline(always)]
+pub(crate) fn offset<V: Real>(node: &NodeLanes<V>, rec: &ReceiverLanes<V>) -> Offset<V> {
+    let vx = node.cx - rec.px;
+    let vy = node.cy - rec.py;
+    let vz = node.cz - rec.pz;
+    Offset {
+        vx,
+        vy,
+        vz,
+        d2: vx * vx + vy * vy + vz * vz,
+    }
+}
+
+/// Mask 1a: the sphere lies wholly below the receiver's tangent plane, `v·n ≤ −R`.
+#[inline(always)]
+pub(crate) fn below_horizon<V: Real>(node: &NodeLanes<V>, rec: &ReceiverLanes<V>, o: &Offset<V>) -> V::Mask {
+    let vn = o.vx * rec.nx + o.vy * rec.ny + o.vz * rec.nz;
+    vn.le(-node.r)
+}
+
+/// Mask 1b: every disk below the node faces away from the receiver.
+///
+/// With `d = x − c`, `t = a·d` and `s = |a × d|`, the largest `m·(x − p)` over
+/// cone normals `m` and points `p` of the sphere is at most
+/// `cosθ·t + sinθ·s + R` (for `θ ≤ π/2`), so the node is culled when
+/// `sinθ·s + R ≤ cosθ·(a·v)`, `v = −d`. A cone stored as `(0, 1)` never culls.
+#[inline(always)]
+pub(crate) fn faces_away<V: Real>(node: &NodeLanes<V>, o: &Offset<V>) -> V::Mask {
+    let va = o.vx * node.ax + o.vy * node.ay + o.vz * node.az;
+    let kx = node.ay * o.vz - node.az * o.vy;
+    let ky = node.az * o.vx - node.ax * o.vz;
+    let kz = node.ax * o.vy - node.ay * o.vx;
+    let s = (kx * kx + ky * ky + kz * kz).sqrt();
+    (node.sin * s + node.r).le(node.cos * va)
+}
+
+/// Mask 2: far enough to splat, `π R² < Ω d²` (no division: `d² = 0` is fine).
+#[inline(always)]
+pub(crate) fn far<V: Real>(node: &NodeLanes<V>, o: &Offset<V>, omega: V) -> V::Mask {
+    (V::splat(std::f32::consts::PI) * node.r * node.r).lt(omega * o.d2)
+}
+
+/// Discard and far masks of the whole test, evaluated eagerly (for lanes).
+#[inline(always)]
+pub(crate) fn classify<V: Real>(node: &NodeLanes<V>, rec: &ReceiverLanes<V>, omega: V) -> (V::Mask, V::Mask) {
+    let o = offset(node, rec);
+    let discard = below_horizon(node, rec, &o) | faces_away(node, &o);
+    (discard, far(node, &o, omega))
+}
+
+/// One of the test's outcomes for a (receiver, node) pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Outcome {
+    /// Culled: below the tangent plane or facing wholly away.
+    Discard,
+    /// Part of the cut: far enough (or a leaf), rasterized into the microbuffer.
+    Splat,
+    /// Too close: both children are tested.
+    Traverse,
+}
+
+/// The scalar test, short-circuited: the later masks are only computed when
+/// the earlier ones did not decide. Same operations as [`classify`].
+#[inline(always)]
+pub(crate) fn outcome_scalar(node: &NodeLanes<f32>, rec: &ReceiverLanes<f32>, omega: f32, leaf: bool) -> Outcome {
+    let o = offset(node, rec);
+    if below_horizon(node, rec, &o) || faces_away(node, &o) {
+        Outcome::Discard
+    } else if leaf || far(node, &o, omega) {
+        Outcome::Splat
+    } else {
+        Outcome::Traverse
+    }
+}
+
+/// Lane mask helpers.
+#[inline(always)]
+pub(crate) fn lane_mask(count: usize) -> u16 {
+    if count >= LANES { u16::MAX } else { ((1u32 << count) - 1) as u16 }
+}
+
+/// Loads node `k` for the scalar test.
+#[inline(always)]
+pub(crate) fn load_node(a: &NodeArrays, k: usize) -> NodeLanes<f32> {
+    NodeLanes {
+        cx: a.cx[k],
+        cy: a.cy[k],
+        cz: a.cz[k],
+        r: a.r[k],
+        ax: a.ax[k],
+        ay: a.ay[k],
+        az: a.az[k],
+        cos: a.cos[k],
+        sin: a.sin[k],
+    }
+}
+
+/// Gathers node `ids[i]` into lane `i`.
+#[inline(always)]
+pub(crate) fn gather_nodes(a: &NodeArrays, ids: Simd<usize, LANES>) -> NodeLanes<F32s> {
+    let g = |v: &[f32]| F32s::gather_or_default(v, ids);
+    NodeLanes {
+        cx: g(&a.cx),
+        cy: g(&a.cy),
+        cz: g(&a.cz),
+        r: g(&a.r),
+        ax: g(&a.ax),
+        ay: g(&a.ay),
+        az: g(&a.az),
+        cos: g(&a.cos),
+        sin: g(&a.sin),
+    }
+}
+
+/// Calls `f` with the index of every set bit of `bits`, lowest first.
+#[inline(always)]
+pub(crate) fn for_each_lane(mut bits: u16, mut f: impl FnMut(usize)) {
+    while bits != 0 {
+        f(bits.trailing_zeros() as usize);
+        bits &= bits - 1;
+    }
+}

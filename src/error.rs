@@ -1,0 +1,138 @@
+//! Typed errors of the kernel layer: each names the offending item.
+
+use std::fmt;
+
+use crate::cut::Isa;
+
+/// What is wrong with one input value.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Invalid {
+    /// A component is NaN or infinite.
+    NonFinite {
+        /// The field holding it (`"position"`, `"normal"`, `"radius"`, `"radiance"`).
+        field: &'static str,
+    },
+    /// The radius is zero or negative.
+    NonPositiveRadius(f32),
+    /// A radiance component is negative.
+    NegativeRadiance,
+    /// The normal has length zero.
+    ZeroNormal,
+    /// The normal is not of unit length (within [`NORMAL_TOLERANCE`]).
+    NonUnitNormal {
+        /// Its length.
+        length: f32,
+    },
+}
+
+/// Largest accepted `|length² − 1|` of a normal. Normals are never renormalized
+/// behind the caller's back, so one a little off is rejected instead.
+pub const NORMAL_TOLERANCE: f32 = 1e-4;
+
+/// Errors of the kernel layer (point cloud, receivers, traversal options, dispatch).
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Error {
+    /// Surfel `index` of the input is invalid.
+    InvalidSurfel {
+        /// Position of the surfel in the caller's input.
+        index: usize,
+        /// What is wrong with it.
+        reason: Invalid,
+    },
+    /// A receiver is invalid (`index` is its position in the caller's input,
+    /// or 0 for one built alone).
+    InvalidReceiver {
+        /// Position of the receiver in the caller's input.
+        index: usize,
+        /// What is wrong with it.
+        reason: Invalid,
+    },
+    /// A traversal parameter is out of range.
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// The value given, as text.
+        value: String,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// More surfels than node indices can address.
+    TooManySurfels {
+        /// Surfels given.
+        count: usize,
+        /// The most accepted.
+        max: usize,
+    },
+    /// The requested instruction-set path cannot run on this CPU (or was not
+    /// compiled for this architecture).
+    IsaUnavailable {
+        /// The path asked for.
+        requested: Isa,
+        /// The paths this CPU can run, best first.
+        available: Vec<Isa>,
+    },
+    /// `PBGI_ISA` or a parsed name is not a known path.
+    UnknownIsa {
+        /// The text given.
+        value: String,
+    },
+    /// A scheme name is not known.
+    UnknownScheme {
+        /// The text given.
+        value: String,
+    },
+}
+
+impl fmt::Display for Invalid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Invalid::NonFinite { field } => write!(f, "{field} is not finite"),
+            Invalid::NonPositiveRadius(r) => write!(f, "radius {r} is not positive"),
+            Invalid::NegativeRadiance => write!(f, "radiance has a negative component"),
+            Invalid::ZeroNormal => write!(f, "normal has zero length"),
+            Invalid::NonUnitNormal { length } => {
+                write!(f, "normal has length {length}, expected 1")
+            }
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::InvalidSurfel { index, reason } => write!(f, "surfel {index}: {reason}"),
+            Error::InvalidReceiver { index, reason } => write!(f, "receiver {index}: {reason}"),
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } => write!(f, "parameter {name} = {value}: expected {expected}"),
+            Error::TooManySurfels { count, max } => {
+                write!(f, "{count} surfels given, at most {max} supported")
+            }
+            Error::IsaUnavailable {
+                requested,
+                available,
+            } => {
+                let names: Vec<_> = available.iter().map(|i| i.name()).collect();
+                write!(
+                    f,
+                    "instruction set {} is not available on this CPU (available: {})",
+                    requested.name(),
+                    names.join(", ")
+                )
+            }
+            Error::UnknownIsa { value } => write!(
+                f,
+                "unknown instruction set {value:?} (expected auto, avx512, avx2, neon or portable)"
+            ),
+            Error::UnknownScheme { value } => write!(
+                f,
+                "unknown traversal scheme {value:?} (expected scalar, single, packet or hybrid)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Error {}

@@ -1,0 +1,348 @@
+//! The bounding-sphere hierarchy (BSH): a binary tree over the surfels, stored
+//! structure-of-arrays so the kernels load node fields straight into lanes.
+//!
+//! Node `0` is the root. Siblings are adjacent (`left`, `left + 1`) and a left
+//! subtree is stored before its right sibling's, so the depth-first kernels walk
+//! memory mostly forwards. Leaves hold exactly one surfel.
+//!
+//! The build splits at the median along the widest axis of the surfel
+//! positions, with the surfel index breaking ties, so it is `O(n log n)`,
+//! deterministic, of depth `⌈log₂ n⌉`, and terminates on any input (a million
+//! coincident surfels included). Bounds are computed in `f64` and rounded
+//! outwards to `f32`; every operation is homogeneous in the coordinates, so
+//! scaling the input by `2^k` scales the tree's spheres by exactly `2^k`.
+
+use glam::{DVec3, Vec3};
+
+use crate::points::{PointCloud, Surfel};
+
+/// Index of a node in a [`Tree`].
+pub type NodeId = u32;
+
+/// Bit set in [`NodeArrays::child`] for a leaf; the low bits hold its surfel.
+pub(crate) const LEAF_BIT: u32 = 1 << 31;
+
+/// Bound on the tree depth (levels below the root): `⌈log₂ MAX_SURFELS⌉`.
+pub const MAX_DEPTH: usize = 30;
+
+/// The per-node fields the node test reads, one array per field.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct NodeArrays {
+    /// Bounding-sphere centre.
+    pub cx: Vec<f32>,
+    pub cy: Vec<f32>,
+    pub cz: Vec<f32>,
+    /// Bounding-sphere radius; the sphere contains every disk below the node.
+    pub r: Vec<f32>,
+    /// Normal-cone axis (unit).
+    pub ax: Vec<f32>,
+    pub ay: Vec<f32>,
+    pub az: Vec<f32>,
+    /// Cosine and sine of the cone half-angle, rounded outwards. A cone wider
+    /// than a hemisphere is stored as `(0, 1)`, which never culls.
+    pub cos: Vec<f32>,
+    pub sin: Vec<f32>,
+    /// Left child (right is `left + 1`), or `LEAF_BIT | surfel`.
+    pub child: Vec<u32>,
+}
+
+/// A read-only view of one node, for inspection and tests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeView {
+    /// Bounding-sphere centre.
+    pub center: Vec3,
+    /// Bounding-sphere radius.
+    pub radius: f32,
+    /// Normal-cone axis.
+    pub cone_axis: Vec3,
+    /// Cosine of the cone half-angle (0 for a cone of a hemisphere or wider).
+    pub cone_cos: f32,
+    /// Sine of the cone half-angle.
+    pub cone_sin: f32,
+    /// Total surfel area below the node.
+    pub area: f32,
+    /// Area-weighted mean normal (not normalized: shorter where normals spread).
+    pub normal: Vec3,
+    /// Area-weighted mean outgoing radiance.
+    pub radiance: Vec3,
+    /// Left child (the right one is `left + 1`), `None` for a leaf.
+    pub children: Option<NodeId>,
+    /// The surfel of a leaf (index into the cloud), `None` for an inner node.
+    pub surfel: Option<u32>,
+}
+
+/// The bounding-sphere hierarchy over a [`PointCloud`].
+///
+/// ```
+/// use pbgi::{PointCloud, Surfel, Tree};
+/// use glam::Vec3;
+///
+/// let surfels = (0..100)
+///     .map(|i| Surfel {
+///         position: Vec3::new(i as f32, 0.0, 0.0),
+///         normal: Vec3::Y,
+///         radius: 0.5,
+///         radiance: Vec3::ONE,
+///     })
+///     .collect();
+/// let tree = Tree::build(&PointCloud::new(surfels)?);
+/// assert_eq!(tree.len(), 199);
+/// assert_eq!(tree.depth(), 7);
+/// # Ok::<(), pbgi::Error>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct Tree {
+    pub(crate) nodes: NodeArrays,
+    area: Vec<f32>,
+    normal: Vec<Vec3>,
+    radiance: Vec<Vec3>,
+    depth: u32,
+}
+
+/// A node as the builder makes it, before the split into arrays.
+#[derive(Clone, Copy, Debug, Default)]
+struct BuildNode {
+    center: [f32; 3],
+    radius: f32,
+    axis: [f32; 3],
+    cos: f32,
+    sin: f32,
+    child: u32,
+    area: f32,
+    normal: Vec3,
+    radiance: Vec3,
+    depth: u32,
+}
+
+/// Subtrees smaller than this are built on the calling thread.
+const PARALLEL_CUTOFF: usize = 4096;
+
+impl Tree {
+    /// Builds the hierarchy. `O(n log n)`, deterministic, parallel over subtrees.
+    pub fn build(cloud: &PointCloud) -> Tree {
+        let surfels = cloud.surfels();
+        let n = surfels.len();
+        if n == 0 {
+            return Tree::default();
+        }
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut built = vec![BuildNode::default(); 2 * n - 1];
+        let (root, below) = built.split_first_mut().expect("n > 0");
+        *root = build_subtree(surfels, &mut order, below, 1);
+
+        let mut tree = Tree {
+            depth: root.depth,
+            ..Tree::default()
+        };
+        let a = &mut tree.nodes;
+        for b in &built {
+            a.cx.push(b.center[0]);
+            a.cy.push(b.center[1]);
+            a.cz.push(b.center[2]);
+            a.r.push(b.radius);
+            a.ax.push(b.axis[0]);
+            a.ay.push(b.axis[1]);
+            a.az.push(b.axis[2]);
+            a.cos.push(b.cos);
+            a.sin.push(b.sin);
+            a.child.push(b.child);
+            tree.area.push(b.area);
+            tree.normal.push(b.normal);
+            tree.radiance.push(b.radiance);
+        }
+        tree
+    }
+
+    /// Number of nodes (`2n − 1` for `n` surfels, 0 for an empty cloud).
+    pub fn len(&self) -> usize {
+        self.nodes.r.len()
+    }
+
+    /// True for the tree of an empty cloud.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Levels below the root (0 for a single surfel); at most [`MAX_DEPTH`].
+    pub fn depth(&self) -> usize {
+        self.depth as usize
+    }
+
+    /// Bytes of node data per surfel (the traversal fields and the shading payload).
+    pub fn bytes_per_surfel(&self) -> f64 {
+        let per_node = 10 * 4 + 4 + 2 * 12;
+        let surfels = self.len().div_ceil(2).max(1);
+        (self.len() * per_node) as f64 / surfels as f64
+    }
+
+    /// True when `node` is a leaf.
+    #[inline]
+    pub fn is_leaf(&self, node: NodeId) -> bool {
+        self.nodes.child[node as usize] & LEAF_BIT != 0
+    }
+
+    /// Left child of an inner node (the right one is `left + 1`).
+    #[inline]
+    pub fn left_child(&self, node: NodeId) -> Option<NodeId> {
+        let c = self.nodes.child[node as usize];
+        (c & LEAF_BIT == 0).then_some(c)
+    }
+
+    /// Everything known about one node. Panics if `node` is out of range.
+    pub fn node(&self, node: NodeId) -> NodeView {
+        let k = node as usize;
+        let a = &self.nodes;
+        let c = a.child[k];
+        NodeView {
+            center: Vec3::new(a.cx[k], a.cy[k], a.cz[k]),
+            radius: a.r[k],
+            cone_axis: Vec3::new(a.ax[k], a.ay[k], a.az[k]),
+            cone_cos: a.cos[k],
+            cone_sin: a.sin[k],
+            area: self.area[k],
+            normal: self.normal[k],
+            radiance: self.radiance[k],
+            children: (c & LEAF_BIT == 0).then_some(c),
+            surfel: (c & LEAF_BIT != 0).then_some(c & !LEAF_BIT),
+        }
+    }
+
+    /// Parent of every node (`None` for the root), for invariant checks.
+    pub fn parents(&self) -> Vec<Option<NodeId>> {
+        let mut parent = vec![None; self.len()];
+        for k in 0..self.len() as u32 {
+            if let Some(l) = self.left_child(k) {
+                parent[l as usize] = Some(k);
+                parent[l as usize + 1] = Some(k);
+            }
+        }
+        parent
+    }
+}
+
+/// Builds the subtree over `order` (surfel indices), returns its root and fills
+/// `below` (exactly `2·len − 2` slots) with its descendants; `base` is the node
+/// index of `below[0]`. Layout of `below`: both children, then the left child's
+/// descendants, then the right child's.
+fn build_subtree(surfels: &[Surfel], order: &mut [u32], below: &mut [BuildNode], base: u32) -> BuildNode {
+    debug_assert_eq!(below.len(), 2 * order.len() - 2);
+    let (lo, hi) = position_bounds(surfels, order);
+    let mut node = bound_node(surfels, order, lo, hi);
+    if order.len() == 1 {
+        node.child = LEAF_BIT | order[0];
+        return node;
+    }
+
+    // Median split along the widest axis; the index breaks ties, so duplicate
+    // positions still split in two halves.
+    let ext = hi - lo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let len = order.len();
+    let mid = len / 2;
+    order.select_nth_unstable_by(mid, |&i, &j| {
+        let (a, b) = (surfels[i as usize].position[axis], surfels[j as usize].position[axis]);
+        a.total_cmp(&b).then(i.cmp(&j))
+    });
+    let (left_order, right_order) = order.split_at_mut(mid);
+    let (pair, rest) = below.split_at_mut(2);
+    let (left_below, right_below) = rest.split_at_mut(2 * left_order.len() - 2);
+    let left_base = base + 2;
+    let right_base = left_base + left_below.len() as u32;
+    let (l, r) = if len >= PARALLEL_CUTOFF {
+        rayon::join(
+            || build_subtree(surfels, left_order, left_below, left_base),
+            || build_subtree(surfels, right_order, right_below, right_base),
+        )
+    } else {
+        (
+            build_subtree(surfels, left_order, left_below, left_base),
+            build_subtree(surfels, right_order, right_below, right_base),
+        )
+    };
+    node.depth = 1 + l.depth.max(r.depth);
+    pair[0] = l;
+    pair[1] = r;
+    node.child = base;
+    node
+}
+
+fn position_bounds(surfels: &[Surfel], order: &[u32]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::INFINITY;
+    let mut hi = Vec3::NEG_INFINITY;
+    for &i in order {
+        let p = surfels[i as usize].position;
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (lo, hi)
+}
+
+/// Bounding sphere, normal cone and aggregates of the surfels in `order`.
+fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNode {
+    // Centre of the position box: exact in f64, so homogeneous in the scale.
+    let center = (lo.as_dvec3() + hi.as_dvec3()) * 0.5;
+    let center32 = center.as_vec3();
+    let c = center32.as_dvec3();
+    let mut radius = 0.0f64;
+    let mut area = 0.0f64;
+    let mut normal = DVec3::ZERO;
+    let mut radiance = DVec3::ZERO;
+    for &i in order {
+        let s = &surfels[i as usize];
+        radius = radius.max(s.position.as_dvec3().distance(c) + s.radius as f64);
+        let a = (s.radius as f64) * (s.radius as f64);
+        area += a;
+        normal += s.normal.as_dvec3() * a;
+        radiance += s.radiance.as_dvec3() * a;
+    }
+    // The cone's axis is the area-weighted normal direction; its half-angle the
+    // widest normal from it. Both are scale-free.
+    let axis = normal.normalize_or_zero();
+    let mut cos_min = if axis == DVec3::ZERO { -1.0 } else { 1.0f64 };
+    if cos_min > 0.0 {
+        for &i in order {
+            let n = surfels[i as usize].normal.as_dvec3();
+            cos_min = cos_min.min(axis.dot(n / n.length()));
+        }
+    }
+    // Slack for rounding in the node test; cones past a hemisphere never cull.
+    let cos_min = cos_min - 1e-6;
+    let (cos, sin) = if cos_min <= 0.0 {
+        (0.0f32, 1.0f32)
+    } else {
+        let sin = (1.0 - cos_min * cos_min).max(0.0).sqrt();
+        (round_down(cos_min), round_up(sin).min(1.0))
+    };
+    let radius32 = round_up(radius * (1.0 + 1e-6));
+    let pi_area = std::f64::consts::PI * area;
+    BuildNode {
+        center: center32.to_array(),
+        radius: radius32,
+        axis: axis.as_vec3().to_array(),
+        cos,
+        sin,
+        child: 0,
+        area: pi_area as f32,
+        normal: (normal / area).as_vec3(),
+        radiance: (radiance / area).as_vec3(),
+        depth: 0,
+    }
+}
+
+/// Smallest f32 ≥ `x`.
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
+/// Largest f32 ≤ `x`.
+fn round_down(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x { f.next_down() } else { f }
+}
