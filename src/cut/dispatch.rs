@@ -180,7 +180,7 @@ fn run_all<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], si
     if t.tree.is_empty() {
         return stats;
     }
-    let mut scratch = Vec::with_capacity(64 * (t.tree.depth() + 2));
+    let mut scratch = single::PairStack::default();
     match scheme {
         Scheme::Scalar => {
             for (i, r) in receivers.iter().enumerate() {
@@ -189,9 +189,7 @@ fn run_all<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], si
         }
         Scheme::Single => {
             for (i, r) in receivers.iter().enumerate() {
-                scratch.clear();
-                scratch.push(0);
-                single::traverse_from(t, &r.lanes().splat(), i, &mut scratch, sink, &mut stats);
+                single::traverse_node(t, &r.lanes(), i, 0, &mut scratch, sink, &mut stats);
             }
         }
         Scheme::Packet => {

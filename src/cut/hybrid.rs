@@ -4,8 +4,9 @@
 //! entry's subtree on its own with 16 nodes in the lanes; the packet goes on
 //! with the rest of its stack, so coherent parts of the tree stay packeted.
 
-use super::test::{F32s, ReceiverLanes, for_each_lane};
-use super::{CutSink, Receiver, Traversal, TraversalStats, single};
+use super::single::{self, PairStack};
+use super::test::for_each_lane;
+use super::{CutSink, Receiver, Traversal, TraversalStats};
 
 /// Finishes the subtree of `node` for each lane of `mask` with single traversal.
 #[inline(always)]
@@ -16,15 +17,12 @@ pub(crate) fn finish<S: CutSink>(
     base: usize,
     node: u32,
     mask: u16,
-    scratch: &mut Vec<u32>,
+    scratch: &mut PairStack,
     sink: &mut S,
     stats: &mut TraversalStats,
 ) {
     stats.switches += 1;
     for_each_lane(mask, |l| {
-        let rec: ReceiverLanes<F32s> = receivers[l].lanes().splat();
-        scratch.clear();
-        scratch.push(node);
-        single::traverse_from(t, &rec, base + l, scratch, sink, stats);
+        single::traverse_node(t, &receivers[l].lanes(), base + l, node, scratch, sink, stats);
     });
 }

@@ -3,6 +3,7 @@
 //! paper's node queue and mask queue).
 
 use super::hybrid;
+use super::single::PairStack;
 use super::test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 use crate::tree::{LEAF_BIT, MAX_DEPTH};
@@ -38,7 +39,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
     t: &Traversal,
     receivers: &[Receiver],
     base: usize,
-    scratch: &mut Vec<u32>,
+    scratch: &mut PairStack,
     sink: &mut S,
     stats: &mut TraversalStats,
 ) {

@@ -1,59 +1,170 @@
-//! Single: one receiver, up to 16 nodes from its stack in the lanes at once.
-//! The three masks come from one vector test; traversed nodes push both
-//! children back on the stack.
+//! Single: one receiver, 16 nodes in the lanes at once.
+//!
+//! Both children of a traversed node are always tested, and siblings are
+//! adjacent in the tree, so the stack holds *sibling pairs* (the left child's
+//! id): one step pops 8 pairs into the 16 lanes, loads each field as 8
+//! contiguous two-float chunks, and pushes one entry per traversed lane,
+//! branch-free. The three masks come from the shared vector node test.
 
-use std::simd::prelude::*;
+use std::simd::{Select, prelude::*};
 
-use super::test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, gather_nodes, lane_mask};
+use super::test::{
+    F32s, LANES, NodeLanes, Outcome, ReceiverLanes, classify, for_each_lane, lane_mask, load_node,
+    outcome_scalar,
+};
 use super::{CutSink, Traversal, TraversalStats};
-use crate::tree::LEAF_BIT;
+use crate::tree::{LEAF_BIT, NodeArrays};
 
-/// Traverses for one receiver (the same in every lane) from the nodes on
-/// `stack` until it is empty.
+/// Sibling pairs per step.
+const PAIRS: usize = LANES / 2;
+
+/// A pair stack with room to write a whole step's pushes without checks.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PairStack {
+    buf: Vec<u32>,
+    len: usize,
+}
+
+impl PairStack {
+    #[inline(always)]
+    fn reserve_step(&mut self) {
+        // Pops read up to PAIRS entries past `len`, pushes write up to LANES.
+        if self.buf.len() < self.len + LANES + PAIRS {
+            self.buf.resize((self.len + LANES + PAIRS) * 2, 0);
+        }
+    }
+}
+
+/// Tests `node` for one receiver, then finishes its subtree 16 nodes at a time.
 #[inline(always)]
-pub(crate) fn traverse_from<S: CutSink>(
+pub(crate) fn traverse_node<S: CutSink>(
+    t: &Traversal,
+    rec: &ReceiverLanes<f32>,
+    index: usize,
+    node: u32,
+    stack: &mut PairStack,
+    sink: &mut S,
+    stats: &mut TraversalStats,
+) {
+    let a = &t.tree.nodes;
+    let child = a.child[node as usize];
+    stats.node_tests += 1;
+    match outcome_scalar(&load_node(a, node as usize), rec, t.omega, child & LEAF_BIT != 0) {
+        Outcome::Discard => {
+            if S::DISCARDS {
+                sink.discard(index, node)
+            }
+        }
+        Outcome::Splat => sink.splat(index, node),
+        Outcome::Traverse => {
+            stack.len = 0;
+            stack.reserve_step();
+            stack.buf[0] = child;
+            stack.len = 1;
+            traverse_pairs(t, &rec.splat(), index, stack, sink, stats);
+        }
+    }
+}
+
+/// Loads field `f` of the pairs `ids[i], ids[i] + 1` into lanes `2i, 2i + 1`.
+///
+/// # Safety
+/// Every `ids[i] + 1` must be a node of the tree.
+#[inline(always)]
+unsafe fn load_pairs(f: &[f32], ids: &[u32; PAIRS]) -> F32s {
+    let mut out = [0f32; LANES];
+    for i in 0..PAIRS {
+        // SAFETY: ids[i] + 1 < f.len() by the caller's contract.
+        let pair = unsafe { f.as_ptr().add(ids[i] as usize).cast::<[f32; 2]>().read() };
+        out[2 * i] = pair[0];
+        out[2 * i + 1] = pair[1];
+    }
+    F32s::from_array(out)
+}
+
+/// # Safety
+/// As [`load_pairs`].
+#[inline(always)]
+unsafe fn load_pair_nodes(a: &NodeArrays, ids: &[u32; PAIRS]) -> NodeLanes<F32s> {
+    // SAFETY: forwarded contract.
+    unsafe {
+        NodeLanes {
+            cx: load_pairs(&a.cx, ids),
+            cy: load_pairs(&a.cy, ids),
+            cz: load_pairs(&a.cz, ids),
+            r: load_pairs(&a.r, ids),
+            ax: load_pairs(&a.ax, ids),
+            ay: load_pairs(&a.ay, ids),
+            az: load_pairs(&a.az, ids),
+            cos: load_pairs(&a.cos, ids),
+            sin: load_pairs(&a.sin, ids),
+        }
+    }
+}
+
+/// Traverses the sibling pairs on `stack` until it is empty.
+#[inline(always)]
+fn traverse_pairs<S: CutSink>(
     t: &Traversal,
     rec: &ReceiverLanes<F32s>,
     index: usize,
-    stack: &mut Vec<u32>,
+    stack: &mut PairStack,
     sink: &mut S,
     stats: &mut TraversalStats,
 ) {
     let a = &t.tree.nodes;
     let omega = F32s::splat(t.omega);
-    while !stack.is_empty() {
-        let len = stack.len();
-        let count = len.min(LANES);
-        let start = len - count;
-        let ids = Simd::<u32, LANES>::load_or_default(&stack[start..]);
-        stack.truncate(start);
+    let lane_id = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| (l & 1) as u32));
+    while stack.len > 0 {
+        stack.reserve_step();
+        let pairs = stack.len.min(PAIRS);
+        let start = stack.len - pairs;
+        stack.len = start;
+        // Entries past the popped ones are stale pair ids (or zero-filled slack),
+        // so every lane reads a valid pair; lanes past `2 * pairs` are masked.
+        let ids: [u32; PAIRS] = stack.buf[start..start + PAIRS].try_into().expect("slack reserved");
 
-        let ids_usize = ids.cast::<usize>();
-        let node = gather_nodes(a, ids_usize);
-        let child = Simd::<u32, LANES>::gather_or_default(&a.child, ids_usize);
+        // SAFETY: the stack only ever holds left children read from the tree
+        // (their right sibling follows) and its slack holds such ids or 0,
+        // and node 0 has a sibling-slot 1 in any tree with a pair to push.
+        let (node, child) = unsafe {
+            let child: [u32; LANES] = std::array::from_fn(|l| {
+                *a.child.get_unchecked(ids[l / 2] as usize + (l & 1))
+            });
+            (load_pair_nodes(a, &ids), Simd::from_array(child))
+        };
+        let node_ids = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| ids[l / 2])) + lane_id;
         let (discard, far) = classify(&node, rec, omega);
         let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
 
-        let valid = lane_mask(count);
+        let valid = lane_mask(2 * pairs);
         let discard = discard.to_bitmask() as u16 & valid;
         let far = far.to_bitmask() as u16;
         let leaf = leaf.to_bitmask() as u16;
         let splat = valid & !discard & (far | leaf);
         let traverse = valid & !discard & !far & !leaf;
 
-        stats.node_tests += count as u64;
-        stats.active_lanes += count as u64;
+        let active = 2 * pairs as u64;
+        stats.node_tests += active;
+        stats.active_lanes += active;
         stats.lane_slots += LANES as u64;
 
-        let ids = ids.to_array();
-        let child = child.to_array();
-        for_each_lane(splat, |l| sink.splat(index, ids[l]));
+        let node_ids = node_ids.to_array();
+        for_each_lane(splat, |l| sink.splat(index, node_ids[l]));
         if S::DISCARDS {
-            for_each_lane(discard, |l| sink.discard(index, ids[l]));
+            for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
         }
-        for_each_lane(traverse, |l| {
-            stack.push(child[l] + 1);
-            stack.push(child[l]);
-        });
+        // Branch-free push of every traversed lane's child pair. Every lane
+        // writes, so the slack past `len` must only ever hold valid pair ids:
+        // lanes not traversed write 0.
+        let child = Mask::<i32, LANES>::from_bitmask(traverse as u64)
+            .select(child, Simd::splat(0))
+            .to_array();
+        let mut len = stack.len;
+        for (l, &c) in child.iter().enumerate() {
+            stack.buf[len] = c;
+            len += ((traverse >> l) & 1) as usize;
+        }
+        stack.len = len;
     }
 }

@@ -231,23 +231,6 @@ pub(crate) fn load_node(a: &NodeArrays, k: usize) -> NodeLanes<f32> {
     }
 }
 
-/// Gathers node `ids[i]` into lane `i`.
-#[inline(always)]
-pub(crate) fn gather_nodes(a: &NodeArrays, ids: Simd<usize, LANES>) -> NodeLanes<F32s> {
-    let g = |v: &[f32]| F32s::gather_or_default(v, ids);
-    NodeLanes {
-        cx: g(&a.cx),
-        cy: g(&a.cy),
-        cz: g(&a.cz),
-        r: g(&a.r),
-        ax: g(&a.ax),
-        ay: g(&a.ay),
-        az: g(&a.az),
-        cos: g(&a.cos),
-        sin: g(&a.sin),
-    }
-}
-
 /// Calls `f` with the index of every set bit of `bits`, lowest first.
 #[inline(always)]
 pub(crate) fn for_each_lane(mut bits: u16, mut f: impl FnMut(usize)) {
