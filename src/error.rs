@@ -111,10 +111,7 @@ impl fmt::Display for Error {
             Error::TooManySurfels { count, max } => {
                 write!(f, "{count} surfels given, at most {max} supported")
             }
-            Error::IsaUnavailable {
-                requested,
-                available,
-            } => {
+            Error::IsaUnavailable { requested, available } => {
                 let names: Vec<_> = available.iter().map(|i| i.name()).collect();
                 write!(
                     f,

@@ -59,9 +59,7 @@ pub(crate) fn check_normal(n: Vec3) -> Result<(), Invalid> {
         return Err(Invalid::ZeroNormal);
     }
     if (len2 - 1.0).abs() > NORMAL_TOLERANCE {
-        return Err(Invalid::NonUnitNormal {
-            length: len2.sqrt(),
-        });
+        return Err(Invalid::NonUnitNormal { length: len2.sqrt() });
     }
     Ok(())
 }

@@ -73,9 +73,24 @@ fn quads() -> Vec<Quad> {
         });
     };
     // Floor (+y), ceiling (−y), back (+z), left (+x, red), right (−x, green).
-    inward(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(0.0, 0.0, 2.0), Vec3::new(2.0, 0.0, 0.0), white);
-    inward(Vec3::new(-1.0, 1.0, -1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 2.0), white);
-    inward(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), white);
+    inward(
+        Vec3::new(-1.0, -1.0, -1.0),
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        white,
+    );
+    inward(
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 2.0),
+        white,
+    );
+    inward(
+        Vec3::new(-1.0, -1.0, -1.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 2.0, 0.0),
+        white,
+    );
     inward(
         Vec3::new(-1.0, -1.0, -1.0),
         Vec3::new(0.0, 2.0, 0.0),

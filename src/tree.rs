@@ -1,5 +1,6 @@
 //! The bounding-sphere hierarchy (BSH): a binary tree over the surfels, stored
-//! structure-of-arrays so the kernels load node fields straight into lanes.
+//! as sibling-pair records, structure-of-arrays within each pair, so the
+//! kernels load node fields straight into lanes.
 //!
 //! Node `0` is the root. Siblings are adjacent (`left`, `left + 1`) and a left
 //! subtree is stored before its right sibling's, so the depth-first kernels walk
@@ -25,25 +26,77 @@ pub(crate) const LEAF_BIT: u32 = 1 << 31;
 /// Bound on the tree depth (levels below the root): `⌈log₂ MAX_SURFELS⌉`.
 pub const MAX_DEPTH: usize = 30;
 
-/// The per-node fields the node test reads, one array per field.
+/// Index of a field in [`PairRecord::f`].
+pub(crate) mod field {
+    pub const CX: usize = 0;
+    pub const CY: usize = 1;
+    pub const CZ: usize = 2;
+    pub const R: usize = 3;
+    pub const AX: usize = 4;
+    pub const AY: usize = 5;
+    pub const AZ: usize = 6;
+    pub const COS: usize = 7;
+    pub const SIN: usize = 8;
+    pub const COUNT: usize = 9;
+}
+
+/// The node-test fields of two sibling nodes, structure-of-arrays within the
+/// pair: `f[field][slot]`. Both children of a traversed node are always tested
+/// together, so a pair is the unit the kernels load: single reads field `j`
+/// of 8 pairs as 8 contiguous two-float chunks straight into 16 lanes, and a
+/// pair spans at most two cache lines (ten with one array per field).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(16))]
+pub(crate) struct PairRecord {
+    /// Per field: bounding-sphere centre x, y, z and radius (the sphere holds
+    /// every disk below the node); normal-cone axis x, y, z (unit); cosine and
+    /// sine of the cone half-angle, rounded outwards (a cone wider than a
+    /// hemisphere is stored as `(0, 1)`, which never culls).
+    pub f: [[f32; 2]; field::COUNT],
+    /// Per slot: the pair record of the node's children, or `LEAF_BIT | surfel`.
+    pub child: [u32; 2],
+}
+
+/// The node-test fields of the whole tree. Node `n` lives in record
+/// `(n + 1) / 2`, slot `(n + 1) % 2`: the root alone in record 0 (slot 1), then
+/// the sibling pairs `(2p − 1, 2p)` in record `p`.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct NodeArrays {
-    /// Bounding-sphere centre.
-    pub cx: Vec<f32>,
-    pub cy: Vec<f32>,
-    pub cz: Vec<f32>,
-    /// Bounding-sphere radius; the sphere contains every disk below the node.
-    pub r: Vec<f32>,
-    /// Normal-cone axis (unit).
-    pub ax: Vec<f32>,
-    pub ay: Vec<f32>,
-    pub az: Vec<f32>,
-    /// Cosine and sine of the cone half-angle, rounded outwards. A cone wider
-    /// than a hemisphere is stored as `(0, 1)`, which never culls.
-    pub cos: Vec<f32>,
-    pub sin: Vec<f32>,
-    /// Left child (right is `left + 1`), or `LEAF_BIT | surfel`.
-    pub child: Vec<u32>,
+    pub pairs: Vec<PairRecord>,
+}
+
+impl NodeArrays {
+    /// Record and slot of node `n`.
+    #[inline(always)]
+    pub fn locate(n: u32) -> (usize, usize) {
+        let m = n as usize + 1;
+        (m >> 1, m & 1)
+    }
+
+    /// First node id of pair record `p` (its slot 0).
+    #[inline(always)]
+    pub fn first_of_pair(p: u32) -> u32 {
+        (2 * p).wrapping_sub(1)
+    }
+
+    /// Field `j` of node `n`.
+    #[inline(always)]
+    pub fn get(&self, n: u32, j: usize) -> f32 {
+        let (p, s) = Self::locate(n);
+        self.pairs[p].f[j][s]
+    }
+
+    /// Child pair record of node `n`, or `LEAF_BIT | surfel`.
+    #[inline(always)]
+    pub fn child(&self, n: u32) -> u32 {
+        let (p, s) = Self::locate(n);
+        self.pairs[p].child[s]
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        (2 * self.pairs.len()).saturating_sub(1)
+    }
 }
 
 /// A read-only view of one node, for inspection and tests.
@@ -134,18 +187,30 @@ impl Tree {
             depth: root.depth,
             ..Tree::default()
         };
-        let a = &mut tree.nodes;
-        for b in &built {
-            a.cx.push(b.center[0]);
-            a.cy.push(b.center[1]);
-            a.cz.push(b.center[2]);
-            a.r.push(b.radius);
-            a.ax.push(b.axis[0]);
-            a.ay.push(b.axis[1]);
-            a.az.push(b.axis[2]);
-            a.cos.push(b.cos);
-            a.sin.push(b.sin);
-            a.child.push(b.child);
+        let pairs = &mut tree.nodes.pairs;
+        pairs.resize(n, PairRecord::default());
+        for (k, b) in built.iter().enumerate() {
+            let (p, slot) = NodeArrays::locate(k as u32);
+            let values = [
+                b.center[0],
+                b.center[1],
+                b.center[2],
+                b.radius,
+                b.axis[0],
+                b.axis[1],
+                b.axis[2],
+                b.cos,
+                b.sin,
+            ];
+            for (j, v) in values.into_iter().enumerate() {
+                pairs[p].f[j][slot] = v;
+            }
+            // Children are stored by pair record: the left child `c` is odd.
+            pairs[p].child[slot] = if b.child & LEAF_BIT != 0 {
+                b.child
+            } else {
+                NodeArrays::locate(b.child).0 as u32
+            };
             tree.area.push(b.area);
             tree.normal.push(b.normal);
             tree.radiance.push(b.radiance);
@@ -155,7 +220,7 @@ impl Tree {
 
     /// Number of nodes (`2n − 1` for `n` surfels, 0 for an empty cloud).
     pub fn len(&self) -> usize {
-        self.nodes.r.len()
+        self.nodes.len()
     }
 
     /// True for the tree of an empty cloud.
@@ -170,7 +235,7 @@ impl Tree {
 
     /// Bytes of node data per surfel (the traversal fields and the shading payload).
     pub fn bytes_per_surfel(&self) -> f64 {
-        let per_node = 10 * 4 + 4 + 2 * 12;
+        let per_node = std::mem::size_of::<PairRecord>() / 2 + 4 + 2 * 12;
         let surfels = self.len().div_ceil(2).max(1);
         (self.len() * per_node) as f64 / surfels as f64
     }
@@ -178,31 +243,32 @@ impl Tree {
     /// True when `node` is a leaf.
     #[inline]
     pub fn is_leaf(&self, node: NodeId) -> bool {
-        self.nodes.child[node as usize] & LEAF_BIT != 0
+        self.nodes.child(node) & LEAF_BIT != 0
     }
 
     /// Left child of an inner node (the right one is `left + 1`).
     #[inline]
     pub fn left_child(&self, node: NodeId) -> Option<NodeId> {
-        let c = self.nodes.child[node as usize];
-        (c & LEAF_BIT == 0).then_some(c)
+        let c = self.nodes.child(node);
+        (c & LEAF_BIT == 0).then(|| NodeArrays::first_of_pair(c))
     }
 
     /// Everything known about one node. Panics if `node` is out of range.
     pub fn node(&self, node: NodeId) -> NodeView {
         let k = node as usize;
         let a = &self.nodes;
-        let c = a.child[k];
+        let g = |j| a.get(node, j);
+        let c = a.child(node);
         NodeView {
-            center: Vec3::new(a.cx[k], a.cy[k], a.cz[k]),
-            radius: a.r[k],
-            cone_axis: Vec3::new(a.ax[k], a.ay[k], a.az[k]),
-            cone_cos: a.cos[k],
-            cone_sin: a.sin[k],
+            center: Vec3::new(g(field::CX), g(field::CY), g(field::CZ)),
+            radius: g(field::R),
+            cone_axis: Vec3::new(g(field::AX), g(field::AY), g(field::AZ)),
+            cone_cos: g(field::COS),
+            cone_sin: g(field::SIN),
             area: self.area[k],
             normal: self.normal[k],
             radiance: self.radiance[k],
-            children: (c & LEAF_BIT == 0).then_some(c),
+            children: self.left_child(node),
             surfel: (c & LEAF_BIT != 0).then_some(c & !LEAF_BIT),
         }
     }
@@ -246,7 +312,10 @@ fn build_subtree(surfels: &[Surfel], order: &mut [u32], below: &mut [BuildNode],
     let len = order.len();
     let mid = len / 2;
     order.select_nth_unstable_by(mid, |&i, &j| {
-        let (a, b) = (surfels[i as usize].position[axis], surfels[j as usize].position[axis]);
+        let (a, b) = (
+            surfels[i as usize].position[axis],
+            surfels[j as usize].position[axis],
+        );
         a.total_cmp(&b).then(i.cmp(&j))
     });
     let (left_order, right_order) = order.split_at_mut(mid);

@@ -88,7 +88,10 @@ impl Isa {
 
     /// The best path this CPU runs.
     pub fn best() -> Isa {
-        Isa::ALL.into_iter().find(|i| i.is_available()).unwrap_or(Isa::Portable)
+        Isa::ALL
+            .into_iter()
+            .find(|i| i.is_available())
+            .unwrap_or(Isa::Portable)
     }
 
     /// `self` if available, else [`Error::IsaUnavailable`].
@@ -137,7 +140,12 @@ impl FromStr for Isa {
 }
 
 /// Runs `scheme` over all receivers on the traversal's path.
-pub(crate) fn run<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+pub(crate) fn run<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     match t.isa() {
         // SAFETY (each arm): a Traversal only holds an Isa whose features
         // `Isa::is_available` detected on this CPU.
@@ -152,27 +160,52 @@ pub(crate) fn run<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiv
 }
 
 #[multiversion::target("x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl")]
-fn run_avx512<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+fn run_avx512<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     run_all(t, scheme, receivers, sink)
 }
 
 #[multiversion::target("x86_64+avx2+fma")]
-fn run_avx2<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+fn run_avx2<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     run_all(t, scheme, receivers, sink)
 }
 
 #[multiversion::target("aarch64+neon")]
-fn run_neon<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+fn run_neon<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     run_all(t, scheme, receivers, sink)
 }
 
-fn run_portable<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+fn run_portable<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     run_all(t, scheme, receivers, sink)
 }
 
 /// The body every clone inlines.
 #[inline(always)]
-fn run_all<S: CutSink>(t: &Traversal, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+fn run_all<S: CutSink>(
+    t: &Traversal,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+) -> TraversalStats {
     let mut stats = TraversalStats {
         receivers: receivers.len() as u64,
         ..Default::default()

@@ -6,7 +6,7 @@ use super::hybrid;
 use super::single::PairStack;
 use super::test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
 use super::{CutSink, Receiver, Traversal, TraversalStats};
-use crate::tree::{LEAF_BIT, MAX_DEPTH};
+use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
 /// Receivers `base..base + receivers.len()` (at most 16) as lanes; unused
 /// lanes repeat the first receiver and stay masked off.
@@ -44,7 +44,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
     stats: &mut TraversalStats,
 ) {
     let a = &t.tree.nodes;
-    if a.r.is_empty() {
+    if a.pairs.is_empty() {
         return;
     }
     let recs = load_receivers(receivers);
@@ -66,8 +66,8 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
         stats.active_lanes += active as u64;
         stats.lane_slots += LANES as u64;
 
-        let node = load_node(a, k as usize).splat();
-        let child = a.child[k as usize];
+        let node = load_node(a, k).splat();
+        let child = a.child(k);
         let (discard, far) = classify(&node, &recs, omega);
         let discard = discard.to_bitmask() as u16 & mask;
         let kept = mask & !discard;
@@ -82,9 +82,10 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
             for_each_lane(discard, |l| sink.discard(base + l, k));
         }
         if traverse != 0 {
-            nodes[sp] = child + 1;
+            let left = NodeArrays::first_of_pair(child);
+            nodes[sp] = left + 1;
             masks[sp] = traverse;
-            nodes[sp + 1] = child;
+            nodes[sp + 1] = left;
             masks[sp + 1] = traverse;
             sp += 2;
         }

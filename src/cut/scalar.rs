@@ -4,13 +4,18 @@
 
 use super::test::{Outcome, ReceiverLanes, load_node, outcome_scalar};
 use super::{CutSink, Traversal};
-use crate::tree::{LEAF_BIT, MAX_DEPTH};
+use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
 /// Traverses for one receiver; returns the number of nodes tested.
 #[inline(always)]
-pub(crate) fn traverse<S: CutSink>(t: &Traversal, rec: &ReceiverLanes<f32>, index: usize, sink: &mut S) -> u64 {
+pub(crate) fn traverse<S: CutSink>(
+    t: &Traversal,
+    rec: &ReceiverLanes<f32>,
+    index: usize,
+    sink: &mut S,
+) -> u64 {
     let a = &t.tree.nodes;
-    if a.r.is_empty() {
+    if a.pairs.is_empty() {
         return 0;
     }
     // Depth first, both children pushed: at most depth + 1 entries.
@@ -21,8 +26,8 @@ pub(crate) fn traverse<S: CutSink>(t: &Traversal, rec: &ReceiverLanes<f32>, inde
         sp -= 1;
         let k = stack[sp];
         tests += 1;
-        let node = load_node(a, k as usize);
-        let child = a.child[k as usize];
+        let node = load_node(a, k);
+        let child = a.child(k);
         match outcome_scalar(&node, rec, t.omega, child & LEAF_BIT != 0) {
             Outcome::Discard => {
                 if S::DISCARDS {
@@ -31,8 +36,9 @@ pub(crate) fn traverse<S: CutSink>(t: &Traversal, rec: &ReceiverLanes<f32>, inde
             }
             Outcome::Splat => sink.splat(index, k),
             Outcome::Traverse => {
-                stack[sp] = child + 1;
-                stack[sp + 1] = child;
+                let left = NodeArrays::first_of_pair(child);
+                stack[sp] = left + 1;
+                stack[sp + 1] = left;
                 sp += 2;
             }
         }

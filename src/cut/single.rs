@@ -13,7 +13,7 @@ use super::test::{
     outcome_scalar,
 };
 use super::{CutSink, Traversal, TraversalStats};
-use crate::tree::{LEAF_BIT, NodeArrays};
+use crate::tree::{LEAF_BIT, PairRecord, field};
 
 /// Sibling pairs per step.
 const PAIRS: usize = LANES / 2;
@@ -47,9 +47,9 @@ pub(crate) fn traverse_node<S: CutSink>(
     stats: &mut TraversalStats,
 ) {
     let a = &t.tree.nodes;
-    let child = a.child[node as usize];
+    let child = a.child(node);
     stats.node_tests += 1;
-    match outcome_scalar(&load_node(a, node as usize), rec, t.omega, child & LEAF_BIT != 0) {
+    match outcome_scalar(&load_node(a, node), rec, t.omega, child & LEAF_BIT != 0) {
         Outcome::Discard => {
             if S::DISCARDS {
                 sink.discard(index, node)
@@ -66,39 +66,24 @@ pub(crate) fn traverse_node<S: CutSink>(
     }
 }
 
-/// Loads field `f` of the pairs `ids[i], ids[i] + 1` into lanes `2i, 2i + 1`.
-///
-/// # Safety
-/// Every `ids[i] + 1` must be a node of the tree.
+/// Field `j` of pair records `ids[i]` into lanes `2i, 2i + 1`.
 #[inline(always)]
-unsafe fn load_pairs(f: &[f32], ids: &[u32; PAIRS]) -> F32s {
-    let mut out = [0f32; LANES];
-    for i in 0..PAIRS {
-        // SAFETY: ids[i] + 1 < f.len() by the caller's contract.
-        let pair = unsafe { f.as_ptr().add(ids[i] as usize).cast::<[f32; 2]>().read() };
-        out[2 * i] = pair[0];
-        out[2 * i + 1] = pair[1];
-    }
-    F32s::from_array(out)
+fn load_field(pairs: &[&PairRecord; PAIRS], j: usize) -> F32s {
+    F32s::from_array(std::array::from_fn(|l| pairs[l / 2].f[j][l & 1]))
 }
 
-/// # Safety
-/// As [`load_pairs`].
 #[inline(always)]
-unsafe fn load_pair_nodes(a: &NodeArrays, ids: &[u32; PAIRS]) -> NodeLanes<F32s> {
-    // SAFETY: forwarded contract.
-    unsafe {
-        NodeLanes {
-            cx: load_pairs(&a.cx, ids),
-            cy: load_pairs(&a.cy, ids),
-            cz: load_pairs(&a.cz, ids),
-            r: load_pairs(&a.r, ids),
-            ax: load_pairs(&a.ax, ids),
-            ay: load_pairs(&a.ay, ids),
-            az: load_pairs(&a.az, ids),
-            cos: load_pairs(&a.cos, ids),
-            sin: load_pairs(&a.sin, ids),
-        }
+fn load_pair_nodes(pairs: &[&PairRecord; PAIRS]) -> NodeLanes<F32s> {
+    NodeLanes {
+        cx: load_field(pairs, field::CX),
+        cy: load_field(pairs, field::CY),
+        cz: load_field(pairs, field::CZ),
+        r: load_field(pairs, field::R),
+        ax: load_field(pairs, field::AX),
+        ay: load_field(pairs, field::AY),
+        az: load_field(pairs, field::AZ),
+        cos: load_field(pairs, field::COS),
+        sin: load_field(pairs, field::SIN),
     }
 }
 
@@ -114,37 +99,40 @@ fn traverse_pairs<S: CutSink>(
 ) {
     let a = &t.tree.nodes;
     let omega = F32s::splat(t.omega);
-    let lane_id = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| (l & 1) as u32));
+    let lane_id = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| (l & 1) as u32)) - Simd::splat(1);
     while stack.len > 0 {
         stack.reserve_step();
-        let pairs = stack.len.min(PAIRS);
-        let start = stack.len - pairs;
+        let count = stack.len.min(PAIRS);
+        let start = stack.len - count;
         stack.len = start;
-        // Entries past the popped ones are stale pair ids (or zero-filled slack),
-        // so every lane reads a valid pair; lanes past `2 * pairs` are masked.
-        let ids: [u32; PAIRS] = stack.buf[start..start + PAIRS].try_into().expect("slack reserved");
+        // Entries past the popped ones are stale pair records (or zero-filled
+        // slack), so every lane reads a valid pair; lanes past `2 * pairs` are masked.
+        let ids: [u32; PAIRS] = stack.buf[start..start + PAIRS]
+            .try_into()
+            .expect("slack reserved");
 
-        // SAFETY: the stack only ever holds left children read from the tree
-        // (their right sibling follows) and its slack holds such ids or 0,
-        // and node 0 has a sibling-slot 1 in any tree with a pair to push.
-        let (node, child) = unsafe {
-            let child: [u32; LANES] = std::array::from_fn(|l| {
-                *a.child.get_unchecked(ids[l / 2] as usize + (l & 1))
-            });
-            (load_pair_nodes(a, &ids), Simd::from_array(child))
-        };
-        let node_ids = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| ids[l / 2])) + lane_id;
+        // SAFETY: the stack and its slack only ever hold pair records read
+        // from the tree's child links, or 0 (the root's record), all in range.
+        let pairs: [&PairRecord; PAIRS] =
+            std::array::from_fn(|i| unsafe { a.pairs.get_unchecked(ids[i] as usize) });
+        let node = load_pair_nodes(&pairs);
+        let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
+            pairs[l / 2].child[l & 1]
+        }));
+        // Node ids of the lanes: 2p − 1 + slot.
+        let node_ids =
+            Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| ids[l / 2])) * Simd::splat(2) + lane_id;
         let (discard, far) = classify(&node, rec, omega);
         let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
 
-        let valid = lane_mask(2 * pairs);
+        let valid = lane_mask(2 * count);
         let discard = discard.to_bitmask() as u16 & valid;
         let far = far.to_bitmask() as u16;
         let leaf = leaf.to_bitmask() as u16;
         let splat = valid & !discard & (far | leaf);
         let traverse = valid & !discard & !far & !leaf;
 
-        let active = 2 * pairs as u64;
+        let active = 2 * count as u64;
         stats.node_tests += active;
         stats.active_lanes += active;
         stats.lane_slots += LANES as u64;

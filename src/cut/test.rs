@@ -6,7 +6,7 @@
 use std::ops::{Add, BitAnd, BitOr, Mul, Neg, Not, Sub};
 use std::simd::prelude::*;
 
-use crate::tree::NodeArrays;
+use crate::tree::{NodeArrays, field};
 
 /// Lanes per kernel vector.
 pub const LANES: usize = 16;
@@ -198,7 +198,12 @@ pub enum Outcome {
 /// The scalar test, short-circuited: the later masks are only computed when
 /// the earlier ones did not decide. Same operations as [`classify`].
 #[inline(always)]
-pub(crate) fn outcome_scalar(node: &NodeLanes<f32>, rec: &ReceiverLanes<f32>, omega: f32, leaf: bool) -> Outcome {
+pub(crate) fn outcome_scalar(
+    node: &NodeLanes<f32>,
+    rec: &ReceiverLanes<f32>,
+    omega: f32,
+    leaf: bool,
+) -> Outcome {
     let o = offset(node, rec);
     if below_horizon(node, rec, &o) || faces_away(node, &o) {
         Outcome::Discard
@@ -212,22 +217,28 @@ pub(crate) fn outcome_scalar(node: &NodeLanes<f32>, rec: &ReceiverLanes<f32>, om
 /// Lane mask helpers.
 #[inline(always)]
 pub(crate) fn lane_mask(count: usize) -> u16 {
-    if count >= LANES { u16::MAX } else { ((1u32 << count) - 1) as u16 }
+    if count >= LANES {
+        u16::MAX
+    } else {
+        ((1u32 << count) - 1) as u16
+    }
 }
 
-/// Loads node `k` for the scalar test.
+/// Loads node `k` for the scalar test (or to splat over the lanes).
 #[inline(always)]
-pub(crate) fn load_node(a: &NodeArrays, k: usize) -> NodeLanes<f32> {
+pub(crate) fn load_node(a: &NodeArrays, k: u32) -> NodeLanes<f32> {
+    let (p, s) = NodeArrays::locate(k);
+    let f = &a.pairs[p].f;
     NodeLanes {
-        cx: a.cx[k],
-        cy: a.cy[k],
-        cz: a.cz[k],
-        r: a.r[k],
-        ax: a.ax[k],
-        ay: a.ay[k],
-        az: a.az[k],
-        cos: a.cos[k],
-        sin: a.sin[k],
+        cx: f[field::CX][s],
+        cy: f[field::CY][s],
+        cz: f[field::CZ][s],
+        r: f[field::R][s],
+        ax: f[field::AX][s],
+        ay: f[field::AY][s],
+        az: f[field::AZ][s],
+        cos: f[field::COS][s],
+        sin: f[field::SIN][s],
     }
 }
 
