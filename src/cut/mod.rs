@@ -109,6 +109,20 @@ pub trait CutSink {
     fn discard(&mut self, receiver: usize, node: NodeId) {
         let _ = (receiver, node);
     }
+
+    /// A vector step of one receiver: `nodes[l]` is in its cut for every set
+    /// bit `l` of `lanes`. Override to consume whole steps at once.
+    #[inline(always)]
+    fn splat_nodes(&mut self, receiver: usize, nodes: &[NodeId; LANES], lanes: u16) {
+        test::for_each_lane(lanes, |l| self.splat(receiver, nodes[l]));
+    }
+
+    /// A packet step: `node` is in the cut of receiver `base + l` for every
+    /// set bit `l` of `lanes`. Override to consume whole steps at once.
+    #[inline(always)]
+    fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
+        test::for_each_lane(lanes, |l| self.splat(base + l, node));
+    }
 }
 
 /// The cut of one receiver, sorted by node.
@@ -211,6 +225,14 @@ impl CutSink for SplatCounter {
     #[inline(always)]
     fn splat(&mut self, _receiver: usize, _node: NodeId) {
         self.splats += 1;
+    }
+    #[inline(always)]
+    fn splat_nodes(&mut self, _receiver: usize, _nodes: &[NodeId; LANES], lanes: u16) {
+        self.splats += lanes.count_ones() as u64;
+    }
+    #[inline(always)]
+    fn splat_receivers(&mut self, _base: usize, _node: NodeId, lanes: u16) {
+        self.splats += lanes.count_ones() as u64;
     }
 }
 

@@ -77,7 +77,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
             let far = far.to_bitmask() as u16;
             (kept & far, kept & !far)
         };
-        for_each_lane(splat, |l| sink.splat(base + l, k));
+        sink.splat_receivers(base, k, splat);
         if S::DISCARDS {
             for_each_lane(discard, |l| sink.discard(base + l, k));
         }

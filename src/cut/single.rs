@@ -138,7 +138,7 @@ fn traverse_pairs<S: CutSink>(
         stats.lane_slots += LANES as u64;
 
         let node_ids = node_ids.to_array();
-        for_each_lane(splat, |l| sink.splat(index, node_ids[l]));
+        sink.splat_nodes(index, &node_ids, splat);
         if S::DISCARDS {
             for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
         }
