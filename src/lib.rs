@@ -45,6 +45,8 @@
 pub mod cut;
 pub mod error;
 pub mod points;
+#[cfg(feature = "render")]
+pub mod scene;
 pub mod synthetic;
 pub mod tree;
 

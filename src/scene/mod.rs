@@ -1,0 +1,330 @@
+//! Scenes: triangle meshes with materials, emitters and a perspective camera.
+//!
+//! Built-in scenes need no files ([`builtin`]); files are read by the loaders
+//! behind the `formats` feature (Mitsuba 3 XML, OBJ + MTL, PLY).
+
+pub mod builtin;
+#[cfg(feature = "formats")]
+pub mod load;
+
+use std::fmt;
+use std::path::PathBuf;
+
+use glam::Vec3;
+
+/// A glossy lobe added to the diffuse base (a Phong-like lobe around the
+/// mirror direction, normalized so that `specular` is its albedo at normal
+/// incidence). Roughness is the GGX-style α: 0.05 is shiny, 0.5 is broad.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Glossy {
+    /// Reflectance of the lobe, RGB in [0, 1].
+    pub specular: Vec3,
+    /// Roughness α in (0, 1].
+    pub roughness: f32,
+}
+
+/// A procedural bump on the shading normal: a sum of sines of the given
+/// spatial frequency (cycles per scene unit) and slope amplitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bump {
+    /// Largest tilt of the normal, as a slope (0.3 ≈ 17°).
+    pub amplitude: f32,
+    /// Cycles per scene unit.
+    pub frequency: f32,
+}
+
+/// A surface material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name (the id in the scene file), for messages.
+    pub name: String,
+    /// Diffuse reflectance, RGB in [0, 1).
+    pub albedo: Vec3,
+    /// Optional glossy lobe.
+    pub glossy: Option<Glossy>,
+    /// Optional procedural bump.
+    pub bump: Option<Bump>,
+    /// Whether the back face reflects too (Mitsuba's `twosided`).
+    pub two_sided: bool,
+}
+
+impl Material {
+    /// A plain diffuse material.
+    pub fn diffuse(name: impl Into<String>, albedo: Vec3) -> Self {
+        Self {
+            name: name.into(),
+            albedo,
+            glossy: None,
+            bump: None,
+            two_sided: false,
+        }
+    }
+}
+
+/// A triangle mesh. The front face is counter-clockwise (`(b − a) × (c − a)`),
+/// as in Mitsuba and OBJ.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Name (the shape id or file), for messages.
+    pub name: String,
+    /// Vertex positions, world space.
+    pub positions: Vec<Vec3>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// Optional per-vertex shading normals (unit), same length as `positions`;
+    /// `None` means face normals.
+    pub normals: Option<Vec<Vec3>>,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Emitted radiance (RGB) from the front face, for an area light.
+    pub emission: Option<Vec3>,
+}
+
+/// A light that is not a surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// A point light of radiant intensity `intensity` (W/sr per channel).
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity, RGB.
+        intensity: Vec3,
+    },
+    /// A directional light: `irradiance` on a surface facing it, arriving
+    /// along `direction` (the direction light travels, unit).
+    Directional {
+        /// Direction of travel (unit).
+        direction: Vec3,
+        /// Irradiance, RGB.
+        irradiance: Vec3,
+    },
+}
+
+/// Which image axis the field of view spans.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// Horizontal.
+    X,
+    /// Vertical.
+    Y,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+/// A pinhole perspective camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub origin: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up hint.
+    pub up: Vec3,
+    /// Field of view in degrees along `fov_axis`.
+    pub fov_degrees: f32,
+    /// The axis `fov_degrees` spans.
+    pub fov_axis: FovAxis,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// Unit forward, right and up vectors (right-handed: image right is
+    /// `forward × up`).
+    pub fn frame(&self) -> (Vec3, Vec3, Vec3) {
+        let forward = (self.target - self.origin).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        (forward, right, up)
+    }
+
+    /// Tangents of the half field of view horizontally and vertically.
+    pub fn tan_half_fov(&self) -> (f32, f32) {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let t = (self.fov_degrees.to_radians() * 0.5).tan();
+        let horizontal = match self.fov_axis {
+            FovAxis::X => true,
+            FovAxis::Y => false,
+            FovAxis::Smaller => w <= h,
+            FovAxis::Larger => w >= h,
+        };
+        if horizontal {
+            (t, t * h / w)
+        } else {
+            (t * w / h, t)
+        }
+    }
+
+    /// Direction (unit) of the ray through image position `(x, y)` in pixels,
+    /// `(0, 0)` the top-left corner of the image.
+    pub fn ray_direction(&self, x: f32, y: f32) -> Vec3 {
+        let (forward, right, up) = self.frame();
+        let (tx, ty) = self.tan_half_fov();
+        let u = (2.0 * x / self.width as f32 - 1.0) * tx;
+        let v = (1.0 - 2.0 * y / self.height as f32) * ty;
+        (forward + right * u + up * v).normalize()
+    }
+}
+
+/// A scene ready to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Name (built-in name or file stem).
+    pub name: String,
+    /// Meshes (area lights are meshes with `emission`).
+    pub meshes: Vec<Mesh>,
+    /// Materials, referenced by index from meshes.
+    pub materials: Vec<Material>,
+    /// Point and directional lights.
+    pub lights: Vec<Light>,
+    /// The camera.
+    pub camera: Camera,
+    /// Everything the loader read but does not support, named (never dropped silently).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Total triangle count.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Whether any material has a glossy lobe.
+    pub fn has_glossy(&self) -> bool {
+        self.materials.iter().any(|m| m.glossy.is_some())
+    }
+
+    /// Whether any material has a bump.
+    pub fn has_bump(&self) -> bool {
+        self.materials.iter().any(|m| m.bump.is_some())
+    }
+
+    /// Checks indices, finiteness and ranges; the error names mesh and item.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let bad = |what: String| Err(SceneError::Invalid { what });
+        for (mi, m) in self.meshes.iter().enumerate() {
+            if m.material >= self.materials.len() {
+                return bad(format!(
+                    "mesh {mi} ({}) refers to missing material {}",
+                    m.name, m.material
+                ));
+            }
+            if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
+                return bad(format!("mesh {mi} ({}) vertex {i} is not finite", m.name));
+            }
+            let n = m.positions.len() as u32;
+            if let Some(t) = m.triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+                return bad(format!(
+                    "mesh {mi} ({}) triangle {t} has a vertex index out of range",
+                    m.name
+                ));
+            }
+            if let Some(normals) = &m.normals {
+                if normals.len() != m.positions.len() {
+                    return bad(format!(
+                        "mesh {mi} ({}) has {} normals for {} vertices",
+                        m.name,
+                        normals.len(),
+                        n
+                    ));
+                }
+            }
+            if let Some(e) = m.emission {
+                if !e.is_finite() || e.min_element() < 0.0 {
+                    return bad(format!(
+                        "mesh {mi} ({}) emission {e} is not finite and ≥ 0",
+                        m.name
+                    ));
+                }
+            }
+        }
+        for m in &self.materials {
+            if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 || m.albedo.max_element() >= 1.0 {
+                return bad(format!(
+                    "material {} albedo {} is not in [0, 1)",
+                    m.name, m.albedo
+                ));
+            }
+        }
+        let c = &self.camera;
+        if c.width == 0 || c.height == 0 || !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
+            return bad(format!(
+                "camera {}×{} fov {} is not usable",
+                c.width, c.height, c.fov_degrees
+            ));
+        }
+        if (c.target - c.origin).length_squared() == 0.0
+            || (c.target - c.origin).cross(c.up).length_squared() == 0.0
+        {
+            return bad("camera looks along its up vector or at its own origin".into());
+        }
+        Ok(())
+    }
+}
+
+/// Errors of the scene layer: each names the file and line, or the item.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// A file could not be read.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The system's message.
+        message: String,
+    },
+    /// A file is malformed.
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (0 when unknown).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A feature the loaders do not support and cannot skip.
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line (0 when unknown).
+        line: usize,
+        /// What it is.
+        what: String,
+    },
+    /// The scene is inconsistent (bad index, non-finite value).
+    Invalid {
+        /// What is wrong, naming the item.
+        what: String,
+    },
+    /// No built-in scene of that name and no such file.
+    UnknownScene {
+        /// The name given.
+        name: String,
+        /// The built-in names.
+        builtins: Vec<&'static str>,
+    },
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SceneError::Io { path, message } => write!(f, "{}: {message}", path.display()),
+            SceneError::Parse { path, line, message } => write!(f, "{}:{line}: {message}", path.display()),
+            SceneError::Unsupported { path, line, what } => {
+                write!(f, "{}:{line}: unsupported: {what}", path.display())
+            }
+            SceneError::Invalid { what } => write!(f, "invalid scene: {what}"),
+            SceneError::UnknownScene { name, builtins } => write!(
+                f,
+                "no built-in scene or file named {name:?} (built-in: {})",
+                builtins.join(", ")
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
