@@ -44,10 +44,14 @@
 
 pub mod cut;
 pub mod error;
+#[cfg(feature = "render")]
+pub mod light;
 pub mod points;
 #[cfg(feature = "render")]
 pub mod scene;
 pub mod synthetic;
+#[cfg(feature = "render")]
+pub mod trace;
 pub mod tree;
 
 pub use cut::{

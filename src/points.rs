@@ -1,5 +1,8 @@
 //! Surfels: the oriented disks that carry the scene's outgoing radiance.
 
+#[cfg(feature = "render")]
+pub mod bake;
+
 use glam::Vec3;
 
 use crate::error::{Error, Invalid, NORMAL_TOLERANCE};

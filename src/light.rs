@@ -1,0 +1,135 @@
+//! Direct light: area emitters (emissive triangles, sampled by area), point
+//! and directional lights, each checked with a shadow ray.
+
+use glam::Vec3;
+
+use crate::scene::{Light, Scene};
+use crate::synthetic::Rng;
+use crate::trace::Tracer;
+
+/// The scene's emitters, ready to sample.
+pub struct Lights {
+    /// Emissive triangles: vertices, unit front normal, radiance.
+    triangles: Vec<([Vec3; 3], Vec3, Vec3)>,
+    /// Cumulative areas of `triangles`.
+    cdf: Vec<f32>,
+    area: f32,
+    others: Vec<Light>,
+}
+
+impl Lights {
+    /// Collects the emitters of `scene`.
+    pub fn new(scene: &Scene) -> Lights {
+        let mut triangles = Vec::new();
+        let mut cdf = Vec::new();
+        let mut area = 0.0f64;
+        for mesh in &scene.meshes {
+            let Some(radiance) = mesh.emission else { continue };
+            if radiance.max_element() <= 0.0 {
+                continue;
+            }
+            for t in &mesh.triangles {
+                let v = t.map(|i| mesh.positions[i as usize]);
+                let c = (v[1] - v[0]).cross(v[2] - v[0]);
+                let a = 0.5 * c.length();
+                if a > 0.0 {
+                    area += a as f64;
+                    cdf.push(area as f32);
+                    triangles.push((v, c.normalize(), radiance));
+                }
+            }
+        }
+        Lights {
+            triangles,
+            cdf,
+            area: area as f32,
+            others: scene.lights.clone(),
+        }
+    }
+
+    /// Whether the scene has any light at all.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty() && self.others.is_empty()
+    }
+
+    /// Reflected direct radiance towards the viewer at `p` (normal `n`,
+    /// facing the viewer's side), `Σ f(ωi)·Li·cosθ / pdf` over `samples`
+    /// area-light samples plus every point and directional light, where `f`
+    /// is the BRDF for incident direction `ωi`.
+    pub fn reflected(
+        &self,
+        tracer: &Tracer,
+        p: Vec3,
+        n: Vec3,
+        samples: u32,
+        rng: &mut Rng,
+        f: impl Fn(Vec3) -> Vec3,
+    ) -> Vec3 {
+        let eps = tracer.epsilon();
+        let origin = p + n * eps;
+        let mut sum = Vec3::ZERO;
+        if !self.triangles.is_empty() && samples > 0 {
+            let mut area_sum = Vec3::ZERO;
+            // Stratified in the first dimension.
+            for s in 0..samples {
+                let u0 = (s as f32 + rng.f32()) / samples as f32;
+                let x = u0 * self.area;
+                let k = self
+                    .cdf
+                    .partition_point(|&c| c <= x)
+                    .min(self.triangles.len() - 1);
+                let (v, ln, radiance) = &self.triangles[k];
+                let (mut a, mut b) = (rng.f32(), rng.f32());
+                if a + b > 1.0 {
+                    (a, b) = (1.0 - a, 1.0 - b);
+                }
+                let q = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+                let d = q - origin;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    continue;
+                }
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let cos_r = n.dot(wi);
+                let cos_l = -ln.dot(wi);
+                if cos_r <= 0.0 || cos_l <= 0.0 {
+                    continue;
+                }
+                if tracer.occluded(origin, wi, dist * (1.0 - 1e-4) - eps) {
+                    continue;
+                }
+                area_sum += f(wi) * *radiance * (cos_r * cos_l / dist2);
+            }
+            sum += area_sum * (self.area / samples as f32);
+        }
+        for light in &self.others {
+            match *light {
+                Light::Point { position, intensity } => {
+                    let d = position - origin;
+                    let dist2 = d.length_squared();
+                    if dist2 <= 0.0 {
+                        continue;
+                    }
+                    let dist = dist2.sqrt();
+                    let wi = d / dist;
+                    let cos_r = n.dot(wi);
+                    if cos_r > 0.0 && !tracer.occluded(origin, wi, dist) {
+                        sum += f(wi) * intensity * (cos_r / dist2);
+                    }
+                }
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => {
+                    let wi = -direction;
+                    let cos_r = n.dot(wi);
+                    if cos_r > 0.0 && !tracer.occluded(origin, wi, f32::INFINITY) {
+                        sum += f(wi) * irradiance * cos_r;
+                    }
+                }
+            }
+        }
+        sum
+    }
+}

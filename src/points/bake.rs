@@ -1,0 +1,105 @@
+//! Baking a scene into surfels: stratified area-uniform sampling of every
+//! surface and direct light at each surfel through shadow rays.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::light::Lights;
+use crate::points::{PointCloud, Surfel};
+use crate::scene::Scene;
+use crate::synthetic::Rng;
+use crate::trace::Tracer;
+
+/// How a scene is turned into surfels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeOptions {
+    /// Surfels per unit of surface area.
+    pub density: f32,
+    /// Area-light samples per surfel.
+    pub light_samples: u32,
+    /// Seed of every random choice (results do not depend on thread count).
+    pub seed: u64,
+}
+
+impl Default for BakeOptions {
+    fn default() -> Self {
+        Self {
+            density: 4000.0,
+            light_samples: 16,
+            seed: 1,
+        }
+    }
+}
+
+/// Surfels with what shading them again needs.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    /// The surfels; their radiance is the reflected direct light (emission is
+    /// left out: the renderer adds direct light with shadow rays).
+    pub cloud: PointCloud,
+    /// Diffuse albedo of each surfel, for extra bounces.
+    pub albedo: Vec<Vec3>,
+}
+
+/// A low-discrepancy point in the unit square (Hammersley with a scramble).
+fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
+    let x = (i as f32 + 0.5) / n as f32;
+    let y = (i.reverse_bits() ^ scramble) as f32 * (1.0 / 4_294_967_296.0);
+    Vec2::new(x, y)
+}
+
+/// Samples the surfels of `scene` and lights them directly.
+pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Baked {
+    // Per triangle, a count from its area (stochastic rounding), stratified
+    // with a scrambled Hammersley set mapped area-preservingly to the triangle.
+    let mut sites: Vec<(Vec3, Vec3, f32, usize)> = Vec::new();
+    let mut tri_seed = Rng::new(opts.seed);
+    for mesh in &scene.meshes {
+        for t in &mesh.triangles {
+            let v = t.map(|i| mesh.positions[i as usize]);
+            let c = (v[1] - v[0]).cross(v[2] - v[0]);
+            let area = 0.5 * c.length();
+            if !(area > 0.0 && area.is_finite()) {
+                continue;
+            }
+            let normal = c.normalize();
+            let want = area * opts.density;
+            let extra = if tri_seed.f32() < want.fract() { 1.0 } else { 0.0 };
+            let n = (want.floor() + extra).max(1.0) as u32;
+            let radius = (area / (n as f32 * std::f32::consts::PI)).sqrt();
+            let scramble = tri_seed.next_u64() as u32;
+            for i in 0..n {
+                let u = hammersley(i, n, scramble);
+                let su = u.x.sqrt();
+                let (b0, b1) = (1.0 - su, u.y * su);
+                let p = v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1);
+                sites.push((p, normal, radius, mesh.material));
+            }
+        }
+    }
+    let (surfels, albedo): (Vec<Surfel>, Vec<Vec3>) = sites
+        .par_iter()
+        .enumerate()
+        .map(|(i, &(position, normal, radius, material))| {
+            let albedo = scene.materials[material].albedo;
+            let mut rng = Rng::new(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let f = albedo * std::f32::consts::FRAC_1_PI;
+            let radiance = if albedo.max_element() > 0.0 {
+                lights.reflected(tracer, position, normal, opts.light_samples, &mut rng, |_| f)
+            } else {
+                Vec3::ZERO
+            };
+            let surfel = Surfel {
+                position,
+                normal,
+                radius,
+                radiance: radiance.max(Vec3::ZERO),
+            };
+            (surfel, albedo)
+        })
+        .unzip();
+    Baked {
+        cloud: PointCloud::new(surfels).expect("baked surfels are finite with unit normals"),
+        albedo,
+    }
+}

@@ -1,0 +1,156 @@
+//! Ray queries against the scene's triangles through a compressed wide BVH
+//! (obvhs): closest hits for camera rays, occlusion for shadow rays.
+
+use std::time::Duration;
+
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+
+use crate::scene::Scene;
+
+/// A ray's closest hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance along the (unit) direction.
+    pub t: f32,
+    /// Mesh index in the scene.
+    pub mesh: u32,
+    /// Triangle index in the mesh.
+    pub triangle: u32,
+    /// Barycentric coordinates of vertices 1 and 2.
+    pub uv: Vec2,
+    /// Unit geometric normal of the front face (counter-clockwise winding).
+    pub geometric_normal: Vec3,
+}
+
+/// The scene's triangles in a BVH.
+pub struct Tracer {
+    bvh: Option<CwBvh>,
+    /// Triangles in BVH primitive order.
+    triangles: Vec<Triangle>,
+    /// (mesh, triangle) of each entry of `triangles`.
+    ids: Vec<(u32, u32)>,
+    /// Offset that moves ray origins off their surface, relative to the scene size.
+    epsilon: f32,
+}
+
+impl Tracer {
+    /// Builds the BVH over every triangle of `scene`.
+    pub fn new(scene: &Scene) -> Tracer {
+        let mut triangles = Vec::with_capacity(scene.triangle_count());
+        let mut ids = Vec::with_capacity(scene.triangle_count());
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for (mi, mesh) in scene.meshes.iter().enumerate() {
+            for (ti, t) in mesh.triangles.iter().enumerate() {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                lo = lo.min(a).min(b).min(c);
+                hi = hi.max(a).max(b).max(c);
+                triangles.push(Triangle {
+                    v0: a.into(),
+                    v1: b.into(),
+                    v2: c.into(),
+                });
+                ids.push((mi as u32, ti as u32));
+            }
+        }
+        let extent = if triangles.is_empty() {
+            1.0
+        } else {
+            (hi - lo).max_element().max(f32::MIN_POSITIVE)
+        };
+        if triangles.is_empty() {
+            return Tracer {
+                bvh: None,
+                triangles,
+                ids,
+                epsilon: 1e-4,
+            };
+        }
+        let bvh = build_cwbvh_from_tris(
+            &triangles,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        // Reorder the triangles into BVH order so a hit's primitive id indexes them directly.
+        let triangles: Vec<Triangle> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| triangles[i as usize])
+            .collect();
+        let ids = bvh.primitive_indices.iter().map(|&i| ids[i as usize]).collect();
+        Tracer {
+            bvh: Some(bvh),
+            triangles,
+            ids,
+            epsilon: 1e-5 * extent,
+        }
+    }
+
+    /// Distance by which secondary rays leave a surface.
+    pub fn epsilon(&self) -> f32 {
+        self.epsilon
+    }
+
+    /// The closest hit along `origin + t·dir`, `t ∈ (0, t_max)`; `dir` unit.
+    pub fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let mut hit = RayHit::none();
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| intersect(&self.triangles[id], r).0) {
+            return None;
+        }
+        let id = hit.primitive_id as usize;
+        let tri = &self.triangles[id];
+        let (t, uv) = intersect(tri, &ray);
+        let (mesh, triangle) = self.ids[id];
+        Some(Hit {
+            t: if t.is_finite() { t } else { hit.t },
+            mesh,
+            triangle,
+            uv,
+            geometric_normal: Vec3::from((tri.v1 - tri.v0).cross(tri.v2 - tri.v0).normalize_or_zero()),
+        })
+    }
+
+    /// Whether anything lies along `origin + t·dir`, `t ∈ (0, t_max)`.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        !bvh.ray_traverse_miss(ray, |r, id| intersect(&self.triangles[id], r).0)
+    }
+}
+
+/// Möller–Trumbore, two-sided: `(t, barycentrics)`, `t = ∞` on a miss.
+#[inline]
+fn intersect(tri: &Triangle, ray: &Ray) -> (f32, Vec2) {
+    let e1: Vec3A = tri.v1 - tri.v0;
+    let e2: Vec3A = tri.v2 - tri.v0;
+    let p = ray.direction.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-20 {
+        return (f32::INFINITY, Vec2::ZERO);
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - tri.v0;
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return (f32::INFINITY, Vec2::ZERO);
+    }
+    let q = s.cross(e1);
+    let v = ray.direction.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return (f32::INFINITY, Vec2::ZERO);
+    }
+    let t = e2.dot(q) * inv;
+    if t > ray.tmin && t < ray.tmax {
+        (t, Vec2::new(u, v))
+    } else {
+        (f32::INFINITY, Vec2::ZERO)
+    }
+}
