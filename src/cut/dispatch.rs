@@ -222,7 +222,9 @@ fn run_all<S: CutSink>(
         }
         Scheme::Single => {
             for (i, r) in receivers.iter().enumerate() {
-                single::traverse_node(t, &r.lanes(), i, 0, &mut scratch, sink, &mut stats);
+                scratch.clear();
+                scratch.push_node(0);
+                single::traverse(t, &r.lanes(), i, &mut scratch, sink, &mut stats);
             }
         }
         Scheme::Packet => {

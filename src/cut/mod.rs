@@ -299,7 +299,7 @@ impl Default for CutOptions {
     fn default() -> Self {
         Self {
             max_solid_angle: 0.05,
-            hybrid_threshold: 4,
+            hybrid_threshold: 2,
             isa: None,
         }
     }

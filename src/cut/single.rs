@@ -1,28 +1,36 @@
 //! Single: one receiver, 16 nodes in the lanes at once.
 //!
 //! Both children of a traversed node are always tested, and siblings are
-//! adjacent in the tree, so the stack holds *sibling pairs* (the left child's
-//! id): one step pops 8 pairs into the 16 lanes, loads each field as 8
+//! adjacent in the tree, so the stack holds *sibling pairs* (a pair record):
+//! one step pops 8 entries into the 16 lanes, loads each field as 8
 //! contiguous two-float chunks, and pushes one entry per traversed lane,
-//! branch-free. The three masks come from the shared vector node test.
+//! branch-free. An entry may also stand for one node of its pair alone (the
+//! root, or a node handed over by the hybrid scheme): a flag bit masks off
+//! the other slot's lane. The three masks come from the shared vector node test.
 
 use std::simd::{Select, prelude::*};
 
-use super::test::{
-    F32s, LANES, NodeLanes, Outcome, ReceiverLanes, classify, for_each_lane, lane_mask, load_node,
-    outcome_scalar,
-};
+use super::test::{F32s, LANES, NodeLanes, ReceiverLanes, classify, lane_mask};
 use super::{CutSink, Traversal, TraversalStats};
-use crate::tree::{LEAF_BIT, PairRecord, field};
+use crate::tree::{LEAF_BIT, NodeArrays, PairRecord, field};
 
-/// Sibling pairs per step.
+/// Entries per step.
 const PAIRS: usize = LANES / 2;
 
-/// A pair stack with room to write a whole step's pushes without checks.
+/// Entry flag: slot 0 of the pair is not to be tested.
+const SKIP_SLOT0: u32 = 1 << 30;
+/// Entry flag: slot 1 of the pair is not to be tested.
+const SKIP_SLOT1: u32 = 1 << 31;
+const PAIR_BITS: u32 = SKIP_SLOT0 - 1;
+
+/// A stack of pair entries with room to write a whole step's pushes without checks.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PairStack {
     buf: Vec<u32>,
     len: usize,
+    /// Entries at the bottom pushed by `push_node`, which may carry flags;
+    /// everything above them is a child pair pushed by the traversal.
+    seeds: usize,
 }
 
 impl PairStack {
@@ -33,40 +41,34 @@ impl PairStack {
             self.buf.resize((self.len + LANES + PAIRS) * 2, 0);
         }
     }
-}
 
-/// Tests `node` for one receiver, then finishes its subtree 16 nodes at a time.
-#[inline(always)]
-pub(crate) fn traverse_node<S: CutSink>(
-    t: &Traversal,
-    rec: &ReceiverLanes<f32>,
-    index: usize,
-    node: u32,
-    stack: &mut PairStack,
-    sink: &mut S,
-    stats: &mut TraversalStats,
-) {
-    let a = &t.tree.nodes;
-    let child = a.child(node);
-    stats.node_tests += 1;
-    match outcome_scalar(&load_node(a, node), rec, t.omega, child & LEAF_BIT != 0) {
-        Outcome::Discard => {
-            if S::DISCARDS {
-                sink.discard(index, node)
-            }
+    /// Empties the stack.
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.seeds = 0;
+    }
+
+    /// Pushes node `n` alone (before any traversal step).
+    #[inline(always)]
+    pub fn push_node(&mut self, n: u32) {
+        debug_assert_eq!(self.seeds, self.len, "seeds go below traversal entries");
+        let (p, slot) = NodeArrays::locate(n);
+        let p = p as u32;
+        // A left node pushed right after its right sibling makes a whole pair again.
+        if slot == 0 && self.len > 0 && self.buf[self.len - 1] == p | SKIP_SLOT0 {
+            self.buf[self.len - 1] = p;
+            return;
         }
-        Outcome::Splat => sink.splat(index, node),
-        Outcome::Traverse => {
-            stack.len = 0;
-            stack.reserve_step();
-            stack.buf[0] = child;
-            stack.len = 1;
-            traverse_pairs(t, &rec.splat(), index, stack, sink, stats);
-        }
+        let entry = p | if slot == 0 { SKIP_SLOT1 } else { SKIP_SLOT0 };
+        self.reserve_step();
+        self.buf[self.len] = entry;
+        self.len += 1;
+        self.seeds = self.len;
     }
 }
 
-/// Field `j` of pair records `ids[i]` into lanes `2i, 2i + 1`.
+/// Field `j` of the popped pair records into lanes `2i, 2i + 1`.
 #[inline(always)]
 fn load_field(pairs: &[&PairRecord; PAIRS], j: usize) -> F32s {
     F32s::from_array(std::array::from_fn(|l| pairs[l / 2].f[j][l & 1]))
@@ -87,9 +89,39 @@ fn load_pair_nodes(pairs: &[&PairRecord; PAIRS]) -> NodeLanes<F32s> {
     }
 }
 
-/// Traverses the sibling pairs on `stack` until it is empty.
+/// Spreads the 8 low bits of `x` to the even bits of the result.
 #[inline(always)]
-fn traverse_pairs<S: CutSink>(
+fn spread(x: u16) -> u16 {
+    let x = (x | (x << 4)) & 0x0F0F;
+    let x = (x | (x << 2)) & 0x3333;
+    (x | (x << 1)) & 0x5555
+}
+
+/// Traverses the entries on `stack` for one receiver until it is empty.
+#[inline(always)]
+pub(crate) fn traverse<S: CutSink>(
+    t: &Traversal,
+    rec: &ReceiverLanes<f32>,
+    index: usize,
+    stack: &mut PairStack,
+    sink: &mut S,
+    stats: &mut TraversalStats,
+) {
+    let rec = rec.splat();
+    while stack.len > 0 {
+        // Seeds (possibly flagged) sit at the bottom: only steps that reach
+        // them pay for the flags.
+        if stack.len - stack.len.min(PAIRS) < stack.seeds {
+            step::<S, true>(t, &rec, index, stack, sink, stats);
+        } else {
+            step::<S, false>(t, &rec, index, stack, sink, stats);
+        }
+    }
+}
+
+/// One step: pops up to 8 entries, tests their nodes, reports, pushes.
+#[inline(always)]
+fn step<S: CutSink, const FLAGS: bool>(
     t: &Traversal,
     rec: &ReceiverLanes<F32s>,
     index: usize,
@@ -98,61 +130,77 @@ fn traverse_pairs<S: CutSink>(
     stats: &mut TraversalStats,
 ) {
     let a = &t.tree.nodes;
-    let omega = F32s::splat(t.omega);
-    let lane_id = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| (l & 1) as u32)) - Simd::splat(1);
-    while stack.len > 0 {
-        stack.reserve_step();
-        let count = stack.len.min(PAIRS);
-        let start = stack.len - count;
-        stack.len = start;
-        // Entries past the popped ones are stale pair records (or zero-filled
-        // slack), so every lane reads a valid pair; lanes past `2 * pairs` are masked.
-        let ids: [u32; PAIRS] = stack.buf[start..start + PAIRS]
-            .try_into()
-            .expect("slack reserved");
-
-        // SAFETY: the stack and its slack only ever hold pair records read
-        // from the tree's child links, or 0 (the root's record), all in range.
-        let pairs: [&PairRecord; PAIRS] =
-            std::array::from_fn(|i| unsafe { a.pairs.get_unchecked(ids[i] as usize) });
-        let node = load_pair_nodes(&pairs);
-        let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
-            pairs[l / 2].child[l & 1]
-        }));
-        // Node ids of the lanes: 2p − 1 + slot.
-        let node_ids =
-            Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| ids[l / 2])) * Simd::splat(2) + lane_id;
-        let (discard, far) = classify(&node, rec, omega);
-        let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
-
-        let valid = lane_mask(2 * count);
-        let discard = discard.to_bitmask() as u16 & valid;
-        let far = far.to_bitmask() as u16;
-        let leaf = leaf.to_bitmask() as u16;
-        let splat = valid & !discard & (far | leaf);
-        let traverse = valid & !discard & !far & !leaf;
-
-        let active = 2 * count as u64;
-        stats.node_tests += active;
-        stats.active_lanes += active;
-        stats.lane_slots += LANES as u64;
-
-        let node_ids = node_ids.to_array();
-        sink.splat_nodes(index, &node_ids, splat);
-        if S::DISCARDS {
-            for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
-        }
-        // Branch-free push of every traversed lane's child pair. Every lane
-        // writes, so the slack past `len` must only ever hold valid pair ids:
-        // lanes not traversed write 0.
-        let child = Mask::<i32, LANES>::from_bitmask(traverse as u64)
-            .select(child, Simd::splat(0))
-            .to_array();
-        let mut len = stack.len;
-        for (l, &c) in child.iter().enumerate() {
-            stack.buf[len] = c;
-            len += ((traverse >> l) & 1) as usize;
-        }
-        stack.len = len;
+    stack.reserve_step();
+    let count = stack.len.min(PAIRS);
+    let start = stack.len - count;
+    stack.len = start;
+    if FLAGS {
+        stack.seeds = stack.seeds.min(start);
     }
+    // Entries past the popped ones are stale unflagged entries (or zero-filled
+    // slack), so every lane reads a valid record; lanes past `2 * count` are
+    // masked off.
+    let mut entries: [u32; PAIRS] = stack.buf[start..start + PAIRS]
+        .try_into()
+        .expect("slack reserved");
+    let mut skipped = 0u16;
+    if FLAGS {
+        let e = Simd::<u32, PAIRS>::from_array(entries);
+        let flag = |f: u32| (e & Simd::splat(f)).simd_ne(Simd::splat(0)).to_bitmask() as u16;
+        skipped = spread(flag(SKIP_SLOT0)) | spread(flag(SKIP_SLOT1)) << 1;
+        entries = (e & Simd::splat(PAIR_BITS)).to_array();
+        // The pushes below overwrite only as many slots as they push, so
+        // clear the popped seeds: no flagged entry may linger above `len`.
+        stack.buf[start..start + PAIRS].fill(0);
+    }
+    debug_assert!(
+        entries.iter().all(|&e| (e as usize) < a.pairs.len()),
+        "entries {entries:x?} start {start} count {count} seeds {} flags {FLAGS} buf {:x?}",
+        stack.seeds,
+        &stack.buf[..(start + 24).min(stack.buf.len())]
+    );
+    // SAFETY: entries only ever hold pair records read from the tree's child
+    // links or located from its node ids (flags stripped above), or 0 (the
+    // root's record), all in range.
+    let pairs: [&PairRecord; PAIRS] =
+        std::array::from_fn(|i| unsafe { a.pairs.get_unchecked(entries[i] as usize) });
+    let node = load_pair_nodes(&pairs);
+    let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
+        pairs[l / 2].child[l & 1]
+    }));
+    let (discard, far) = classify(&node, rec, F32s::splat(t.omega));
+    let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
+
+    let valid = lane_mask(2 * count) & !skipped;
+    let discard = discard.to_bitmask() as u16 & valid;
+    let far = far.to_bitmask() as u16;
+    let leaf = leaf.to_bitmask() as u16;
+    let splat = valid & !discard & (far | leaf);
+    let traverse = valid & !discard & !far & !leaf;
+
+    let active = valid.count_ones() as u64;
+    stats.node_tests += active;
+    stats.active_lanes += active;
+    stats.lane_slots += LANES as u64;
+
+    // Node ids of the lanes: 2p − 1 + slot.
+    let slot = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| (l & 1) as u32));
+    let lane_entry = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| entries[l / 2]));
+    let node_ids = (lane_entry * Simd::splat(2) + slot - Simd::splat(1)).to_array();
+    sink.splat_nodes(index, &node_ids, splat);
+    if S::DISCARDS {
+        super::test::for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
+    }
+    // Branch-free push of every traversed lane's child pair. Every lane
+    // writes, so the slack past `len` must only ever hold valid entries:
+    // lanes not traversed write 0.
+    let child = Mask::<i32, LANES>::from_bitmask(traverse as u64)
+        .select(child, Simd::splat(0))
+        .to_array();
+    let mut len = stack.len;
+    for (l, &c) in child.iter().enumerate() {
+        stack.buf[len] = c;
+        len += ((traverse >> l) & 1) as usize;
+    }
+    stack.len = len;
 }
