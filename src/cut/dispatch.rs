@@ -6,7 +6,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use super::test::LANES;
+use super::node_test::LANES;
 use super::{CutSink, Receiver, Scheme, Traversal, TraversalStats, packet, scalar, single};
 use crate::error::Error;
 

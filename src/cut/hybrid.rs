@@ -9,8 +9,8 @@
 //! the first sparse entry comes early, so it degenerates to single (box of
 //! 10⁵ surfels, 4096 receivers, AVX2: 41–49 ms against 23–24 ms per entry).
 
+use super::node_test::for_each_lane;
 use super::single::{self, PairStack};
-use super::test::for_each_lane;
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 
 /// Finishes the subtree of `node` for each lane of `mask` with single traversal.

@@ -1,6 +1,6 @@
 //! Tree cuts: for each receiver, the nodes whose disks are splatted.
 //!
-//! One node test ([`test`]) and four traversals over it, one file each:
+//! One node test ([`node_test`]) and four traversals over it, one file each:
 //! [`scalar`] (the reference), [`single`] (16 nodes of one receiver in the
 //! lanes), [`packet`] (16 receivers in the lanes, one node at a time) and
 //! [`hybrid`] (packet, then single once few lanes of an entry stay active).
@@ -13,10 +13,10 @@
 
 pub mod dispatch;
 pub mod hybrid;
+pub mod node_test;
 pub mod packet;
 pub mod scalar;
 pub mod single;
-pub mod test;
 
 use std::fmt;
 use std::str::FromStr;
@@ -25,12 +25,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 pub use dispatch::Isa;
-pub use test::{LANES, Outcome};
+pub use node_test::{LANES, Outcome};
 
 use crate::error::{Error, Invalid};
 use crate::points::check_normal;
 use crate::tree::{NodeId, Tree};
-use test::ReceiverLanes;
+use node_test::ReceiverLanes;
 
 /// A point being shaded: position and unit normal of its tangent plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -114,14 +114,14 @@ pub trait CutSink {
     /// bit `l` of `lanes`. Override to consume whole steps at once.
     #[inline(always)]
     fn splat_nodes(&mut self, receiver: usize, nodes: &[NodeId; LANES], lanes: u16) {
-        test::for_each_lane(lanes, |l| self.splat(receiver, nodes[l]));
+        node_test::for_each_lane(lanes, |l| self.splat(receiver, nodes[l]));
     }
 
     /// A packet step: `node` is in the cut of receiver `base + l` for every
     /// set bit `l` of `lanes`. Override to consume whole steps at once.
     #[inline(always)]
     fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
-        test::for_each_lane(lanes, |l| self.splat(base + l, node));
+        node_test::for_each_lane(lanes, |l| self.splat(base + l, node));
     }
 }
 

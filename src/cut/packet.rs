@@ -3,8 +3,8 @@
 //! paper's node queue and mask queue).
 
 use super::hybrid;
+use super::node_test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
 use super::single::PairStack;
-use super::test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
@@ -13,21 +13,15 @@ use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 #[inline(always)]
 pub(crate) fn load_receivers(receivers: &[Receiver]) -> ReceiverLanes<F32s> {
     debug_assert!(!receivers.is_empty() && receivers.len() <= LANES);
-    let mut f = [[0f32; LANES]; 6];
-    for l in 0..LANES {
-        let r = receivers.get(l).unwrap_or(&receivers[0]);
-        let (p, n) = (r.position(), r.normal());
-        for (j, v) in [p.x, p.y, p.z, n.x, n.y, n.z].into_iter().enumerate() {
-            f[j][l] = v;
-        }
-    }
+    let lane = |l: usize| receivers.get(l).unwrap_or(&receivers[0]);
+    let field = |g: fn(&Receiver) -> f32| F32s::from_array(std::array::from_fn(|l| g(lane(l))));
     ReceiverLanes {
-        px: F32s::from_array(f[0]),
-        py: F32s::from_array(f[1]),
-        pz: F32s::from_array(f[2]),
-        nx: F32s::from_array(f[3]),
-        ny: F32s::from_array(f[4]),
-        nz: F32s::from_array(f[5]),
+        px: field(|r| r.position().x),
+        py: field(|r| r.position().y),
+        pz: field(|r| r.position().z),
+        nx: field(|r| r.normal().x),
+        ny: field(|r| r.normal().y),
+        nz: field(|r| r.normal().z),
     }
 }
 

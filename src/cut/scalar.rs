@@ -2,7 +2,7 @@
 //! fixed-size stack, the node test short-circuited. Every speed-up is measured
 //! against this, so it is kept as fast as plain scalar code gets.
 
-use super::test::{Outcome, ReceiverLanes, load_node, outcome_scalar};
+use super::node_test::{Outcome, ReceiverLanes, load_node, outcome_scalar};
 use super::{CutSink, Traversal};
 use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 

@@ -10,7 +10,7 @@
 
 use std::simd::{Select, prelude::*};
 
-use super::test::{F32s, LANES, NodeLanes, ReceiverLanes, classify, lane_mask};
+use super::node_test::{F32s, LANES, NodeLanes, ReceiverLanes, classify, lane_mask};
 use super::{CutSink, Traversal, TraversalStats};
 use crate::tree::{LEAF_BIT, NodeArrays, PairRecord, field};
 
@@ -189,7 +189,7 @@ fn step<S: CutSink, const FLAGS: bool>(
     let node_ids = (lane_entry * Simd::splat(2) + slot - Simd::splat(1)).to_array();
     sink.splat_nodes(index, &node_ids, splat);
     if S::DISCARDS {
-        super::test::for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
+        super::node_test::for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
     }
     // Branch-free push of every traversed lane's child pair. Every lane
     // writes, so the slack past `len` must only ever hold valid entries:
