@@ -42,6 +42,7 @@
 #![feature(portable_simd)]
 #![warn(missing_docs)]
 
+pub mod brdf;
 pub mod cut;
 pub mod error;
 #[cfg(feature = "render")]

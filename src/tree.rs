@@ -273,6 +273,35 @@ impl Tree {
         }
     }
 
+    /// Total surfel area below `node` (shading payload).
+    #[inline]
+    pub fn area(&self, node: NodeId) -> f32 {
+        self.area[node as usize]
+    }
+
+    /// Area-weighted mean normal below `node` (length ≤ 1; shorter where normals spread).
+    #[inline]
+    pub fn mean_normal(&self, node: NodeId) -> Vec3 {
+        self.normal[node as usize]
+    }
+
+    /// Area-weighted mean outgoing radiance below `node`.
+    #[inline]
+    pub fn radiance(&self, node: NodeId) -> Vec3 {
+        self.radiance[node as usize]
+    }
+
+    /// Bounding-sphere centre and radius of `node`.
+    #[inline]
+    pub fn sphere(&self, node: NodeId) -> (Vec3, f32) {
+        let (p, s) = NodeArrays::locate(node);
+        let f = &self.nodes.pairs[p].f;
+        (
+            Vec3::new(f[field::CX][s], f[field::CY][s], f[field::CZ][s]),
+            f[field::R][s],
+        )
+    }
+
     /// Parent of every node (`None` for the root), for invariant checks.
     pub fn parents(&self) -> Vec<Option<NodeId>> {
         let mut parent = vec![None; self.len()];

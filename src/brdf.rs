@@ -1,0 +1,135 @@
+//! BRDFs shared by the point-based shading and the reference path tracer:
+//! Lambert plus an optional normalized Phong lobe around the mirror direction.
+
+use glam::Vec3;
+
+/// A glossy lobe: `f_s(ωi, ωo) = specular · (e + 2)/(2π) · max(0, r·ωi)^e`,
+/// `r` the mirror direction of `ωo`, exponent `e = 2/α² − 2` from the
+/// roughness `α`. At normal incidence its albedo is `specular·(e+2)/(e+1)`
+/// times the fraction of the lobe above the surface, so about `specular`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlossyLobe {
+    /// Reflectance of the lobe, RGB.
+    pub specular: Vec3,
+    /// Roughness α in (0, 1].
+    pub roughness: f32,
+}
+
+impl GlossyLobe {
+    /// The Phong exponent `2/α² − 2` (≥ 0).
+    pub fn exponent(&self) -> f32 {
+        let a = self.roughness.clamp(1e-3, 1.0);
+        (2.0 / (a * a) - 2.0).max(0.0)
+    }
+
+    /// Mirror of `wo` about `n`.
+    fn mirror(n: Vec3, wo: Vec3) -> Vec3 {
+        2.0 * n.dot(wo) * n - wo
+    }
+
+    /// `f_s(ωi, ωo)`, zero when `ωi` or `ωo` is below the surface.
+    pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+        if n.dot(wi) <= 0.0 || n.dot(wo) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let c = Self::mirror(n, wo).dot(wi);
+        if c <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let e = self.exponent();
+        self.specular * ((e + 2.0) * std::f32::consts::FRAC_1_PI * 0.5 * c.powf(e))
+    }
+
+    /// Density (solid angle) of [`sample`](Self::sample) producing `wi`.
+    pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        let c = Self::mirror(n, wo).dot(wi);
+        if c <= 0.0 {
+            return 0.0;
+        }
+        let e = self.exponent();
+        (e + 1.0) * std::f32::consts::FRAC_1_PI * 0.5 * c.powf(e)
+    }
+
+    /// A direction around the mirror direction, `cosθ = u1^(1/(e+1))`, and its
+    /// density. It may point below the surface (then `eval` is zero).
+    pub fn sample(&self, n: Vec3, wo: Vec3, u1: f32, u2: f32) -> (Vec3, f32) {
+        let r = Self::mirror(n, wo).normalize_or(n);
+        let e = self.exponent();
+        let cos = u1.max(1e-12).powf(1.0 / (e + 1.0));
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * u2;
+        let (t, b) = r.any_orthonormal_pair();
+        let wi = (t * (sin * phi.cos()) + b * (sin * phi.sin()) + r * cos).normalize();
+        (wi, self.pdf(n, wo, wi))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::Rng;
+
+    /// ∫ f_s cosθ dω over the hemisphere, by importance sampling the lobe.
+    fn albedo(lobe: &GlossyLobe, n: Vec3, wo: Vec3) -> f32 {
+        let mut rng = Rng::new(3);
+        let m = 200_000;
+        let mut sum = 0.0f64;
+        for _ in 0..m {
+            let (wi, pdf) = lobe.sample(n, wo, rng.f32(), rng.f32());
+            if pdf > 0.0 {
+                sum += (lobe.eval(n, wo, wi).x * n.dot(wi).max(0.0) / pdf) as f64;
+            }
+        }
+        (sum / m as f64) as f32
+    }
+
+    #[test]
+    fn energy_at_normal_incidence_is_about_specular_and_bounded() {
+        for roughness in [0.05, 0.2, 0.5] {
+            let lobe = GlossyLobe {
+                specular: Vec3::splat(0.6),
+                roughness,
+            };
+            let a = albedo(&lobe, Vec3::Z, Vec3::Z);
+            assert!(
+                a <= 0.6 * 1.01,
+                "roughness {roughness}: albedo {a} exceeds specular"
+            );
+            assert!(
+                a > 0.6 * 0.8,
+                "roughness {roughness}: albedo {a} far below specular"
+            );
+        }
+    }
+
+    #[test]
+    fn reciprocal() {
+        let lobe = GlossyLobe {
+            specular: Vec3::ONE,
+            roughness: 0.3,
+        };
+        let n = Vec3::Z;
+        let a = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let b = Vec3::new(-0.2, 0.3, 0.8).normalize();
+        let (x, y) = (lobe.eval(n, a, b).x, lobe.eval(n, b, a).x);
+        assert!((x - y).abs() <= 1e-5 * x.max(y), "{x} vs {y}");
+    }
+
+    #[test]
+    fn pdf_integrates_to_one() {
+        // Uniform-sphere estimate of ∫ pdf dω.
+        let lobe = GlossyLobe {
+            specular: Vec3::ONE,
+            roughness: 0.4,
+        };
+        let wo = Vec3::new(0.2, 0.0, 1.0).normalize();
+        let mut rng = Rng::new(9);
+        let m = 400_000;
+        let mut sum = 0.0f64;
+        for _ in 0..m {
+            sum += lobe.pdf(Vec3::Z, wo, rng.unit_vector()) as f64;
+        }
+        let integral = sum / m as f64 * 4.0 * std::f64::consts::PI;
+        assert!((integral - 1.0).abs() < 0.02, "∫ pdf = {integral}");
+    }
+}
