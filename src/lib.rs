@@ -47,7 +47,12 @@ pub mod cut;
 pub mod error;
 #[cfg(feature = "render")]
 pub mod light;
+pub mod microbuffer;
 pub mod points;
+#[cfg(feature = "render")]
+pub mod reference;
+#[cfg(feature = "render")]
+pub mod render;
 #[cfg(feature = "render")]
 pub mod scene;
 pub mod synthetic;

@@ -47,6 +47,45 @@ impl Lights {
         }
     }
 
+    /// Total area of the emissive triangles.
+    pub fn emitter_area(&self) -> f32 {
+        self.area
+    }
+
+    /// Solid-angle density with which [`sample_area`](Self::sample_area)
+    /// picks the direction towards a point at distance² `dist2` on an emitter
+    /// whose normal makes cosine `cos_l` with the direction back to the shading point.
+    pub fn area_pdf(&self, dist2: f32, cos_l: f32) -> f32 {
+        if self.area <= 0.0 || cos_l <= 0.0 {
+            0.0
+        } else {
+            dist2 / (cos_l * self.area)
+        }
+    }
+
+    /// A point on the emitters, uniform by area: `(point, unit normal, radiance)`.
+    pub fn sample_area(&self, u0: f32, u1: f32, u2: f32) -> Option<(Vec3, Vec3, Vec3)> {
+        if self.triangles.is_empty() {
+            return None;
+        }
+        let x = u0 * self.area;
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= x)
+            .min(self.triangles.len() - 1);
+        let (v, n, radiance) = &self.triangles[k];
+        let (mut a, mut b) = (u1, u2);
+        if a + b > 1.0 {
+            (a, b) = (1.0 - a, 1.0 - b);
+        }
+        Some((v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b, *n, *radiance))
+    }
+
+    /// Point and directional lights.
+    pub fn delta_lights(&self) -> &[Light] {
+        &self.others
+    }
+
     /// Whether the scene has any light at all.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty() && self.others.is_empty()

@@ -1,1 +1,254 @@
-fn main() {}
+//! `pbgi`: render scenes with point-based global illumination.
+//!
+//! With no arguments it renders the built-in Cornell box to `cornell-box.png`
+//! and prints the timing summary in the paper's Table 1 columns.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use pbgi::render::{Image, RenderOptions, RenderOutput, SchemeChoice, render};
+use pbgi::scene::load::resolve;
+use pbgi::{Isa, Scheme};
+
+#[derive(Parser)]
+#[command(name = "pbgi", version, about = "Point-based global illumination renderer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene (a built-in name or a Mitsuba XML / OBJ / PLY file).
+    Render(RenderArgs),
+}
+
+#[derive(Args, Clone)]
+struct RenderArgs {
+    /// Built-in scene (cornell-box, cornell-box-glossy) or scene file.
+    #[arg(default_value = "cornell-box")]
+    scene: String,
+    /// Output image: .png (tonemapped sRGB) or .exr (linear radiance). Default: SCENE.png.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Traversal scheme: auto, scalar, single, packet or hybrid.
+    #[arg(long, default_value = "auto")]
+    scheme: String,
+    /// Ω: largest solid angle (sr) of a splatted cluster.
+    #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
+    max_solid_angle: f32,
+    /// Microbuffer resolution N (hemicube top face N×N).
+    #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
+    microbuffer: usize,
+    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
+    #[arg(long, default_value_t = RenderOptions::default().bounces)]
+    bounces: u32,
+    /// Stratified camera samples per pixel (each a receiver); also direct-light samples.
+    #[arg(long, default_value_t = RenderOptions::default().spp)]
+    spp: u32,
+    /// Ambient occlusion instead of radiance.
+    #[arg(long)]
+    ao: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
+    #[arg(long)]
+    isa: Option<String>,
+    /// Surfels per unit area.
+    #[arg(long, default_value_t = RenderOptions::default().density)]
+    density: f32,
+    /// Hybrid: switch an entry to single below this many active lanes.
+    #[arg(long, default_value_t = RenderOptions::default().hybrid_threshold)]
+    hybrid_threshold: u32,
+}
+
+impl Default for RenderArgs {
+    fn default() -> Self {
+        match Cli::parse_from(["pbgi", "render"]).command {
+            Some(Command::Render(a)) => a,
+            _ => unreachable!("`pbgi render` parses as the render command"),
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Render(args)) => cmd_render(&args),
+        None => cmd_render(&RenderArgs::default()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn parse_isa(s: &Option<String>) -> Res<Option<Isa>> {
+    match s.as_deref().map(str::trim) {
+        None => Ok(None),
+        Some(s) if s.eq_ignore_ascii_case("auto") => Ok(Some(Isa::best())),
+        Some(s) => Ok(Some(s.parse::<Isa>()?.require()?)),
+    }
+}
+
+fn options(a: &RenderArgs) -> Res<RenderOptions> {
+    let scheme = if a.scheme.eq_ignore_ascii_case("auto") {
+        SchemeChoice::Auto
+    } else {
+        SchemeChoice::Fixed(a.scheme.parse::<Scheme>()?)
+    };
+    Ok(RenderOptions {
+        scheme,
+        max_solid_angle: a.max_solid_angle,
+        hybrid_threshold: a.hybrid_threshold,
+        microbuffer: a.microbuffer,
+        bounces: a.bounces,
+        spp: a.spp,
+        ao: a.ao,
+        density: a.density,
+        isa: parse_isa(&a.isa)?,
+        ..RenderOptions::default()
+    })
+}
+
+fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        b = b.num_threads(n);
+    }
+    Ok(b.build()?)
+}
+
+fn cmd_render(a: &RenderArgs) -> Res<()> {
+    let scene = resolve(&a.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let opts = options(a)?;
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
+    check_output(&out_path)?;
+    let pool = thread_pool(a.threads)?;
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} tiles, {eta} left")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("rendering {}", scene.name));
+    let out = pool.install(|| {
+        render(&scene, &opts, &|done, total| {
+            if done == 0 {
+                bar.set_length(total as u64);
+            } else {
+                bar.inc(1);
+            }
+        })
+    })?;
+    bar.finish_and_clear();
+    write_image(&out.image, &out_path)?;
+    print_summary(&scene, &opts, &out, pool.current_num_threads());
+    println!("wrote {}", out_path.display());
+    Ok(())
+}
+
+fn check_output(path: &Path) -> Res<()> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("png") | Some("exr") => Ok(()),
+        _ => Err(format!("{}: output must end in .png or .exr", path.display()).into()),
+    }
+}
+
+fn write_image(img: &Image, path: &Path) -> Res<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if ext == "exr" {
+        let (w, h) = (img.width as usize, img.height as usize);
+        exr::prelude::write_rgb_file(path, w, h, |x, y| {
+            let p = img.pixels[y * w + x];
+            (p.x, p.y, p.z)
+        })
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    } else {
+        image::save_buffer(
+            path,
+            &img.to_srgb8(),
+            img.width,
+            img.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
+    let c = &scene.camera;
+    println!(
+        "pbgi render: {} ({} triangles), {}×{}, {} spp, {} bounce(s){}",
+        scene.name,
+        scene.triangle_count(),
+        c.width,
+        c.height,
+        opts.spp,
+        opts.bounces,
+        if opts.ao { ", ambient occlusion" } else { "" }
+    );
+    println!(
+        "scheme {} on {}, Ω {}, microbuffer {}, {} thread(s)",
+        out.scheme, out.isa, opts.max_solid_angle, opts.microbuffer, threads
+    );
+    if out.surfels > 0 {
+        println!(
+            "{} surfels, {} receivers, {:.0} nodes tested per receiver{}",
+            out.surfels,
+            out.receivers,
+            out.stats.nodes_per_receiver(),
+            out.stats
+                .lane_utilization()
+                .map(|u| format!(", lane utilization {:.1} %", 100.0 * u))
+                .unwrap_or_default()
+        );
+    }
+    let t = &out.timings;
+    println!("times (s, summed over threads; total is wall clock):");
+    println!(
+        "  {:>8} {:>16} {:>8} {:>8} {:>12}",
+        "pre.",
+        format!("trav. ({})", out.scheme),
+        "others",
+        "direct",
+        "total (wall)"
+    );
+    println!(
+        "  {:>8.3} {:>16.3} {:>8.3} {:>8.3} {:>12.3}",
+        t.pre, t.trav, t.others, t.direct, t.total_wall
+    );
+    println!("stages:");
+    for s in &out.stages {
+        match &s.skipped {
+            None => println!("  ran      {}", s.name),
+            Some(why) => println!("  skipped  {} ({why})", s.name),
+        }
+    }
+}
