@@ -11,7 +11,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use glam::{DVec2, Vec3};
+use glam::{DVec2, Vec2, Vec3};
 
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
@@ -259,77 +259,63 @@ impl MicroBuffer {
     /// Pixels whose centre direction may lie within angle `a` of local `w`:
     /// per face, the bounding box of the cone's projection, one pixel wider.
     fn for_candidates(table: &Table, w: Vec3, a: f32, mut f: impl FnMut(usize)) {
-        // Usually the cone stays inside the face of its axis: there the
-        // gnomonic projection maps angle `a` at radius ρ to at most
-        // `a·(1 + ρ'²)` (ρ' the far edge), a square window of a few pixels.
-        if a < 0.5 {
-            if let Some((k, uv)) = table.locate(w) {
-                let face = &table.faces[k];
-                let rho2 = uv.length_squared();
-                let grow = a as f64 * (1.0 + rho2);
-                let far = rho2.sqrt() + grow;
-                let half = a as f64 * (1.0 + far * far) * 1.05;
-                let (u0, u1, v0, v1) = (uv.x - half, uv.x + half, uv.y - half, uv.y + half);
-                if u0 >= -1.0 && u1 <= 1.0 && v0 >= face.v0 as f64 && v1 <= 1.0 {
-                    let col = |u: f64| (((u + 1.0) * 0.5 * face.cols as f64) as usize).min(face.cols - 1);
-                    let row = |v: f64| {
-                        (((v - face.v0 as f64) / (1.0 - face.v0 as f64) * face.rows as f64) as usize)
-                            .min(face.rows - 1)
-                    };
-                    for r in row(v0)..=row(v1) {
-                        for c in col(u0)..=col(u1) {
-                            f(face.first + r * face.cols + c);
-                        }
-                    }
-                    return;
-                }
-            }
-        }
         if a >= 1.2 {
             (0..table.dir.len()).for_each(f);
             return;
         }
+        let home = table.locate(w).map(|(k, _)| k);
         let (t, b) = w.any_orthonormal_pair();
         let (s, c) = a.sin_cos();
+        let h = s * std::f32::consts::FRAC_1_SQRT_2;
         let ring: [Vec3; 9] = [
             w,
             w * c + t * s,
             w * c - t * s,
             w * c + b * s,
             w * c - b * s,
-            w * c + (t + b) * (s * std::f32::consts::FRAC_1_SQRT_2),
-            w * c - (t + b) * (s * std::f32::consts::FRAC_1_SQRT_2),
-            w * c + (t - b) * (s * std::f32::consts::FRAC_1_SQRT_2),
-            w * c - (t - b) * (s * std::f32::consts::FRAC_1_SQRT_2),
+            w * c + (t + b) * h,
+            w * c - (t + b) * h,
+            w * c + (t - b) * h,
+            w * c - (t - b) * h,
         ];
-        for face in &table.faces {
-            // Ring directions put on the cube's surface (L∞ normalization)
-            // and clamped into this face bound the cone's footprint on it.
-            let mut lo = DVec2::splat(f64::INFINITY);
-            let mut hi = DVec2::splat(f64::NEG_INFINITY);
-            let mut reaches = false;
-            for d in &ring {
-                let (along, du, dv) = (d.dot(face.axis), d.dot(face.u), d.dot(face.v));
-                reaches |= along > 0.0;
-                let scale = along.max(du.abs()).max(dv.abs()).max(f32::MIN_POSITIVE) as f64;
-                let uv = DVec2::new(du as f64, dv as f64) / scale;
-                lo = lo.min(uv);
-                hi = hi.max(uv);
-            }
-            if !reaches {
+        for (k, face) in table.faces.iter().enumerate() {
+            let (along, du, dv) = (w.dot(face.axis), w.dot(face.u), w.dot(face.v));
+            // A face's directions have `along ≥ max(|u|, |v|)`; turning by `a`
+            // moves each coordinate by at most `a`, so farther faces are out of reach.
+            if along - du.abs().max(dv.abs()) < -2.0 * a {
                 continue;
             }
-            let col = |u: f64| (((u + 1.0) * 0.5 * face.cols as f64).max(0.0) as usize).min(face.cols - 1);
-            let row = |v: f64| {
-                (((v - face.v0 as f64) / (1.0 - face.v0 as f64) * face.rows as f64).max(0.0) as usize)
-                    .min(face.rows - 1)
+            let (lo, hi) = if Some(k) == home && a < 0.5 {
+                // The axis's own face: the gnomonic projection maps angle `a`
+                // at radius ρ to at most `a·(1 + ρ'²)`, ρ' the far edge.
+                let uv = Vec2::new(du, dv) / along;
+                let rho2 = uv.length_squared();
+                let far = rho2.sqrt() + a * (1.0 + rho2);
+                let half = a * (1.0 + far * far) * 1.05;
+                (uv - half, uv + half)
+            } else {
+                // Ring directions put on the cube's surface (L∞ normalization)
+                // and clamped into this face bound the cone's footprint on it.
+                let mut lo = Vec2::splat(f32::INFINITY);
+                let mut hi = Vec2::splat(f32::NEG_INFINITY);
+                for d in &ring {
+                    let (along, du, dv) = (d.dot(face.axis), d.dot(face.u), d.dot(face.v));
+                    let scale = along.max(du.abs()).max(dv.abs()).max(f32::MIN_POSITIVE);
+                    let uv = Vec2::new(du, dv) / scale;
+                    lo = lo.min(uv);
+                    hi = hi.max(uv);
+                }
+                // One pixel of margin: the footprint is a conic, the ring only samples it.
+                let margin = Vec2::new(2.0 / face.cols as f32, (1.0 - face.v0) / face.rows as f32);
+                (lo - margin, hi + margin)
             };
-            // One pixel of margin: the footprint is a conic, the ring only samples it.
-            let (c0, c1) = (col(lo.x).saturating_sub(1), (col(hi.x) + 1).min(face.cols - 1));
-            let (r0, r1) = (row(lo.y).saturating_sub(1), (row(hi.y) + 1).min(face.rows - 1));
-            for r in r0..=r1 {
-                for col in c0..=c1 {
-                    f(face.first + r * face.cols + col);
+            let col = |u: f32| (((u + 1.0) * 0.5 * face.cols as f32).max(0.0) as usize).min(face.cols - 1);
+            let row = |v: f32| {
+                (((v - face.v0) / (1.0 - face.v0) * face.rows as f32).max(0.0) as usize).min(face.rows - 1)
+            };
+            for r in row(lo.y)..=row(hi.y) {
+                for cc in col(lo.x)..=col(hi.x) {
+                    f(face.first + r * face.cols + cc);
                 }
             }
         }
