@@ -4,9 +4,12 @@
 //! the BRDF using exact per-pixel solid angles.
 //!
 //! Order independence (DESIGN §4): each pixel keeps the lexicographic minimum
-//! of `(depth, node)` and that node's coverage, nothing else, and every sum
-//! runs over the pixels in a fixed order; so the shading depends on the set of
-//! splats only, not on the order a traversal scheme reports them in.
+//! of `(depth, node)` (whose radiance it shows) and the sum of the coverages
+//! splatted into it in fixed point (integer addition is associative), and
+//! every sum over pixels runs in a fixed order; so the shading depends on the
+//! set of splats only, not on the order a traversal scheme reports them in.
+//! Summing coverage keeps the energy of many clusters smaller than a pixel
+//! that share it; the sum is clamped to one (a pixel cannot be more than covered).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -48,6 +51,10 @@ struct Table {
     solid_angle: Vec<f32>,
     /// `cosθ · ΔΩ` of each pixel (θ from the normal, +z).
     cos_weight: Vec<f32>,
+    /// Angular size of each pixel, `√ΔΩ`.
+    pixel_size: Vec<f32>,
+    /// The largest pixel size.
+    pixel_angle: f32,
 }
 
 /// ∫∫ over the rectangle `[x0, x1] × [y0, y1]` of the plane at distance 1.
@@ -100,12 +107,16 @@ impl Table {
                 }
             }
         }
+        let pixel_size: Vec<f32> = solid_angle.iter().map(|w| w.sqrt()).collect();
+        let pixel_angle = pixel_size.iter().copied().fold(0.0, f32::max);
         Table {
             n,
             faces,
             dir,
             solid_angle,
             cos_weight,
+            pixel_size,
+            pixel_angle,
         }
     }
 
@@ -173,23 +184,36 @@ pub struct MicroBuffer {
     raster: Raster,
 }
 
-/// Per pixel: the nearest `(depth, node)` and that node's coverage.
+/// Leaf disks are rasterized this much larger than their radius.
+const DISK_INFLATION: f32 = 1.2;
+
+/// One unit of coverage in the fixed-point sums.
+const COVER_ONE: f32 = (1u32 << 24) as f32;
+
+/// Per pixel: the nearest `(depth, node)` and the summed coverage.
 #[derive(Clone, Debug)]
 struct Raster {
     depth: Vec<f32>,
     node: Vec<NodeId>,
-    coverage: Vec<f32>,
+    /// Coverage in units of 2⁻²⁴, summed over every splat.
+    cover: Vec<u64>,
 }
 
 impl Raster {
-    /// Keeps the nearer of what pixel `p` holds and `(depth, node)`.
+    /// Adds a splat of `coverage` ∈ (0, 1] at `depth` to pixel `p`.
     #[inline]
     fn write(&mut self, p: usize, depth: f32, node: NodeId, coverage: f32) {
+        self.cover[p] += (coverage * COVER_ONE) as u64;
         if depth < self.depth[p] || (depth == self.depth[p] && node < self.node[p]) {
             self.depth[p] = depth;
             self.node[p] = node;
-            self.coverage[p] = coverage;
         }
+    }
+
+    /// Coverage of pixel `p` in [0, 1].
+    #[inline]
+    fn coverage(&self, p: usize) -> f32 {
+        (self.cover[p] as f32 / COVER_ONE).min(1.0)
     }
 }
 
@@ -215,7 +239,7 @@ impl MicroBuffer {
             raster: Raster {
                 depth: vec![f32::INFINITY; len],
                 node: vec![EMPTY; len],
-                coverage: vec![0.0; len],
+                cover: vec![0; len],
             },
         })
     }
@@ -243,7 +267,7 @@ impl MicroBuffer {
         self.frame = [t, bt, n];
         self.raster.depth.fill(f32::INFINITY);
         self.raster.node.fill(EMPTY);
-        self.raster.coverage.fill(0.0);
+        self.raster.cover.fill(0);
     }
 
     #[inline]
@@ -361,13 +385,17 @@ impl MicroBuffer {
         if tree.is_leaf(node) && self.splat_disk(node, center, mean_normal, area, d, w) {
             return;
         }
+        // A cone of solid angle Ω, anti-aliased: a pixel at angle θ from its
+        // axis is covered by `0.5 + (a − θ)/δ`, δ the pixel's angular size,
+        // so the coverage of the footprint sums to about Ω.
         let a = (omega * std::f32::consts::FRAC_1_PI).sqrt().min(1.5);
-        let cos_a = a.cos();
-        let mut hit = false;
         let (table, raster) = (&*self.table, &mut self.raster);
-        Self::for_candidates(table, w, a, |p| {
-            if table.dir[p].dot(w) >= cos_a {
-                raster.write(p, d, node, 1.0);
+        let mut hit = false;
+        Self::for_candidates(table, w, a + table.pixel_angle, |p| {
+            let theta = table.dir[p].dot(w).clamp(-1.0, 1.0).acos();
+            let cov = (0.5 + (a - theta) / table.pixel_size[p]).min(1.0);
+            if cov > 0.0 {
+                raster.write(p, d, node, cov);
                 hit = true;
             }
         });
@@ -381,7 +409,10 @@ impl MicroBuffer {
 
     /// Exact disk rasterization of a leaf; false if it covers no pixel centre.
     fn splat_disk(&mut self, node: NodeId, center: Vec3, normal: Vec3, area: f32, d: f32, w: Vec3) -> bool {
-        let r2 = area * std::f32::consts::FRAC_1_PI;
+        // Disks of a surface's own area leave holes between them; drawn a
+        // little larger they overlap, and the coverage clamp counts the
+        // overlap once.
+        let r2 = area * std::f32::consts::FRAC_1_PI * (DISK_INFLATION * DISK_INFLATION);
         let r = r2.sqrt();
         let m = self.to_local(normal);
         let c = self.to_local(center - self.position);
@@ -413,7 +444,7 @@ impl MicroBuffer {
         for p in 0..r.node.len() {
             let k = r.node[p];
             if k != EMPTY {
-                e += tree.radiance(k) * (r.coverage[p] * self.table.cos_weight[p]);
+                e += tree.radiance(k) * (r.coverage(p) * self.table.cos_weight[p]);
             }
         }
         e
@@ -429,7 +460,7 @@ impl MicroBuffer {
             let k = r.node[p];
             if k != EMPTY {
                 let wi = self.to_world(self.table.dir[p]);
-                l += tree.radiance(k) * lobe.eval(n, wo, wi) * (r.coverage[p] * self.table.cos_weight[p]);
+                l += tree.radiance(k) * lobe.eval(n, wo, wi) * (r.coverage(p) * self.table.cos_weight[p]);
             }
         }
         l
@@ -441,7 +472,7 @@ impl MicroBuffer {
         let r = &self.raster;
         for p in 0..r.node.len() {
             if r.node[p] != EMPTY {
-                s += r.coverage[p] * self.table.cos_weight[p];
+                s += r.coverage(p) * self.table.cos_weight[p];
             }
         }
         (s * std::f32::consts::FRAC_1_PI).min(1.0)
