@@ -382,7 +382,17 @@ impl MicroBuffer {
                 return;
             }
         }
-        if tree.is_leaf(node) && self.splat_disk(node, center, mean_normal, area, d, w) {
+        if tree.is_leaf(node) {
+            // A leaf covering no pixel centre is small, edge-on or seen from
+            // its back; `Ω` above is a far-field estimate that blows up for
+            // a disk nearly in the receiver's plane, so give it one pixel at most.
+            if !self.splat_disk(node, center, mean_normal, area, d, w) {
+                if let Some((k, uv)) = self.table.locate(w) {
+                    let p = self.table.pixel(k, uv);
+                    let cov = (omega / self.table.solid_angle[p]).min(1.0);
+                    self.raster.write(p, d, node, cov);
+                }
+            }
             return;
         }
         // A cone of solid angle Ω, anti-aliased: a pixel at angle θ from its
@@ -392,7 +402,8 @@ impl MicroBuffer {
         let (table, raster) = (&*self.table, &mut self.raster);
         let mut hit = false;
         Self::for_candidates(table, w, a + table.pixel_angle, |p| {
-            let theta = table.dir[p].dot(w).clamp(-1.0, 1.0).acos();
+            // The chord |u − w| stands in for the angle (equal to second order).
+            let theta = (2.0 - 2.0 * table.dir[p].dot(w)).max(0.0).sqrt();
             let cov = (0.5 + (a - theta) / table.pixel_size[p]).min(1.0);
             if cov > 0.0 {
                 raster.write(p, d, node, cov);

@@ -62,13 +62,13 @@ impl Default for RenderOptions {
     fn default() -> Self {
         Self {
             scheme: SchemeChoice::Auto,
-            max_solid_angle: 0.03,
+            max_solid_angle: 0.05,
             hybrid_threshold: 2,
             microbuffer: 8,
             bounces: 1,
             spp: 4,
             ao: false,
-            density: 4000.0,
+            density: 2000.0,
             surfel_light_samples: 16,
             isa: None,
             seed: 1,
