@@ -23,6 +23,27 @@ struct Cli {
 enum Command {
     /// Render a scene (a built-in name or a Mitsuba XML / OBJ / PLY file).
     Render(RenderArgs),
+    /// Render the ground truth with the path tracer (same scene, camera, bounces).
+    Reference(ReferenceArgs),
+}
+
+#[derive(Args, Clone)]
+struct ReferenceArgs {
+    /// Built-in scene or scene file.
+    #[arg(default_value = "cornell-box")]
+    scene: String,
+    /// Output image (.exr keeps linear radiance; .png is tonemapped). Default: SCENE-reference.exr.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Paths per pixel.
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
+    /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1 unlimited.
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    bounces: i32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(Args, Clone)]
@@ -78,6 +99,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
+        Some(Command::Reference(args)) => cmd_reference(&args),
         None => cmd_render(&RenderArgs::default()),
     };
     match result {
@@ -160,6 +182,53 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
+    println!("wrote {}", out_path.display());
+    Ok(())
+}
+
+fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
+    let scene = resolve(&a.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}-reference.exr", scene.name)));
+    check_output(&out_path)?;
+    let pool = thread_pool(a.threads)?;
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} rows, {eta} left")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("path tracing {}", scene.name));
+    let opts = pbgi::reference::ReferenceOptions {
+        spp: a.spp,
+        bounces: a.bounces,
+        ..Default::default()
+    };
+    let out = pool.install(|| {
+        pbgi::reference::render_reference(&scene, &opts, &|done, total| {
+            if done == 0 {
+                bar.set_length(total as u64);
+            } else {
+                bar.inc(1);
+            }
+        })
+    })?;
+    bar.finish_and_clear();
+    write_image(&out.image, &out_path)?;
+    println!(
+        "pbgi reference: {} {}×{}, {} spp, {} bounce(s), {:.2} s on {} thread(s)",
+        scene.name,
+        scene.camera.width,
+        scene.camera.height,
+        a.spp,
+        a.bounces,
+        out.seconds,
+        pool.current_num_threads()
+    );
     println!("wrote {}", out_path.display());
     Ok(())
 }
