@@ -1,0 +1,179 @@
+//! Whole renders: every scheme and path gives the same image bit for bit;
+//! the stages a scene does not need are left out; no NaN leaves the renderer.
+
+use pbgi::render::{RenderOptions, SchemeChoice, render};
+use pbgi::scene::builtin::{cornell_box, cornell_box_glossy};
+use pbgi::{Isa, Scheme};
+
+fn small(mut s: pbgi::scene::Scene) -> pbgi::scene::Scene {
+    s.camera.width = 24;
+    s.camera.height = 20;
+    s
+}
+
+fn opts(scheme: Scheme, isa: Isa) -> RenderOptions {
+    RenderOptions {
+        scheme: SchemeChoice::Fixed(scheme),
+        isa: Some(isa),
+        spp: 2,
+        density: 300.0,
+        ..Default::default()
+    }
+}
+
+fn bits(img: &pbgi::render::Image) -> Vec<u32> {
+    img.pixels
+        .iter()
+        .flat_map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn images_of_every_scheme_and_path_are_bit_identical() {
+    for scene in [small(cornell_box()), small(cornell_box_glossy())] {
+        let reference = render(&scene, &opts(Scheme::Scalar, Isa::Portable), &|_, _| {}).unwrap();
+        assert!(
+            reference
+                .image
+                .pixels
+                .iter()
+                .all(|p| p.is_finite() && p.min_element() >= 0.0)
+        );
+        assert!(
+            reference.image.pixels.iter().any(|p| p.max_element() > 0.01),
+            "a black image proves nothing"
+        );
+        for isa in Isa::available() {
+            for scheme in Scheme::ALL {
+                let out = render(&scene, &opts(scheme, isa), &|_, _| {}).unwrap();
+                assert_eq!(
+                    bits(&out.image),
+                    bits(&reference.image),
+                    "{}: {scheme} on {isa}",
+                    scene.name
+                );
+                assert_eq!(
+                    out.stats.node_tests, reference.stats.node_tests,
+                    "same (receiver, node) pairs visited"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn stages_left_out_say_why() {
+    let scene = small(cornell_box());
+    let direct_only = render(
+        &scene,
+        &RenderOptions {
+            bounces: 0,
+            spp: 1,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(direct_only.surfels, 0);
+    assert!(
+        direct_only
+            .stages
+            .iter()
+            .any(|s| s.skipped.as_deref() == Some("--bounces 0: direct light only"))
+    );
+    let one = render(
+        &scene,
+        &RenderOptions {
+            spp: 1,
+            density: 300.0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(
+        one.scheme,
+        Scheme::Packet,
+        "auto picks packet for a smooth diffuse scene"
+    );
+    let glossy = small(cornell_box_glossy());
+    let g = render(
+        &glossy,
+        &RenderOptions {
+            spp: 1,
+            density: 300.0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(
+        g.scheme,
+        Scheme::Hybrid,
+        "auto picks hybrid where glossy lobes and bumps break coherence"
+    );
+    assert!(
+        g.stages
+            .iter()
+            .any(|s| s.name == "glossy lobe convolution" && s.skipped.is_none())
+    );
+    // Indirect light adds energy: one bounce is brighter than none, two brighter than one.
+    let sum =
+        |o: &pbgi::render::RenderOutput| o.image.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>();
+    let two = render(
+        &scene,
+        &RenderOptions {
+            spp: 1,
+            density: 300.0,
+            bounces: 2,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(
+        sum(&one) > sum(&direct_only) * 1.05,
+        "{} vs {}",
+        sum(&one),
+        sum(&direct_only)
+    );
+    assert!(sum(&two) > sum(&one), "{} vs {}", sum(&two), sum(&one));
+    assert!(
+        two.stages
+            .iter()
+            .any(|s| s.name == "extra bounces gathered at surfels" && s.skipped.is_none())
+    );
+    let ao = render(
+        &scene,
+        &RenderOptions {
+            spp: 1,
+            density: 300.0,
+            ao: true,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(ao.image.pixels.iter().all(|p| p.x >= 0.0 && p.x <= 1.0));
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let scene = small(cornell_box());
+    for o in [
+        RenderOptions {
+            spp: 0,
+            ..Default::default()
+        },
+        RenderOptions {
+            microbuffer: 0,
+            ..Default::default()
+        },
+        RenderOptions {
+            max_solid_angle: f32::NAN,
+            ..Default::default()
+        },
+    ] {
+        assert!(render(&scene, &o, &|_, _| {}).is_err());
+    }
+}
