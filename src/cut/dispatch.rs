@@ -189,6 +189,9 @@ fn run_neon<S: CutSink>(
     run_all(t, scheme, receivers, sink)
 }
 
+// Kept out of line like the other clones, so each one can be found in the
+// machine code (scripts/check-asm.sh).
+#[inline(never)]
 fn run_portable<S: CutSink>(
     t: &Traversal,
     scheme: Scheme,
