@@ -49,7 +49,7 @@ struct Table {
     dir: Vec<Vec3>,
     /// Exact solid angle of each pixel.
     solid_angle: Vec<f32>,
-    /// `cosθ · ΔΩ` of each pixel (θ from the normal, +z).
+    /// `∫ cosθ dω` over each pixel (θ from the normal, +z).
     cos_weight: Vec<f32>,
     /// Angular size of each pixel, `√ΔΩ`.
     pixel_size: Vec<f32>,
@@ -101,9 +101,25 @@ impl Table {
                     let (uc, vc) = (u0 + 0.5 * du, v0 + 0.5 * dv);
                     let d = (f.axis.as_dvec3() + f.u.as_dvec3() * uc + f.v.as_dvec3() * vc).normalize();
                     let omega = rect_solid_angle(u0, u0 + du, v0, v0 + dv);
+                    // ∫ cosθ dω over the pixel (midpoint rule): the weights
+                    // then sum to π at every resolution.
+                    let m = (64 / n).max(2);
+                    let mut projected = 0.0;
+                    for i in 0..m {
+                        for j in 0..m {
+                            let (u, v) = (
+                                u0 + (i as f64 + 0.5) * du / m as f64,
+                                v0 + (j as f64 + 0.5) * dv / m as f64,
+                            );
+                            let q = f.axis.as_dvec3() + f.u.as_dvec3() * u + f.v.as_dvec3() * v;
+                            let len = q.length();
+                            projected += (q.z / len).max(0.0) / (len * len * len);
+                        }
+                    }
+                    projected *= du * dv / (m * m) as f64;
                     dir.push(d.as_vec3());
                     solid_angle.push(omega as f32);
-                    cos_weight.push((d.z.max(0.0) * omega) as f32);
+                    cos_weight.push(projected as f32);
                 }
             }
         }
