@@ -402,12 +402,12 @@ impl MicroBuffer {
             // A leaf covering no pixel centre is small, edge-on or seen from
             // its back; `Ω` above is a far-field estimate that blows up for
             // a disk nearly in the receiver's plane, so give it one pixel at most.
-            if !self.splat_disk(node, center, mean_normal, area, d, w) {
-                if let Some((k, uv)) = self.table.locate(w) {
-                    let p = self.table.pixel(k, uv);
-                    let cov = (omega / self.table.solid_angle[p]).min(1.0);
-                    self.raster.write(p, d, node, cov);
-                }
+            if !self.splat_disk(node, center, mean_normal, area, d, w)
+                && let Some((k, uv)) = self.table.locate(w)
+            {
+                let p = self.table.pixel(k, uv);
+                let cov = (omega / self.table.solid_angle[p]).min(1.0);
+                self.raster.write(p, d, node, cov);
             }
             return;
         }
@@ -426,11 +426,9 @@ impl MicroBuffer {
                 hit = true;
             }
         });
-        if !hit {
-            if let Some((k, uv)) = table.locate(w) {
-                let p = table.pixel(k, uv);
-                raster.write(p, d, node, (omega / table.solid_angle[p]).min(1.0));
-            }
+        if !hit && let Some((k, uv)) = table.locate(w) {
+            let p = table.pixel(k, uv);
+            raster.write(p, d, node, (omega / table.solid_angle[p]).min(1.0));
         }
     }
 
@@ -453,7 +451,7 @@ impl MicroBuffer {
                 return; // the disk's back, or edge-on
             }
             let t = m.dot(c) / denom;
-            if !(t > 0.0) {
+            if t.is_nan() || t <= 0.0 {
                 return;
             }
             if (u * t - c).length_squared() <= r2 {

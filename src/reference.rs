@@ -199,10 +199,7 @@ fn trace_path(
     let mut prev_pdf: Option<f32> = None;
     let mut depth = 0; // surface vertices so far
     let max_vertices = if bounces < 0 { u32::MAX } else { bounces as u32 + 1 };
-    loop {
-        let Some(hit) = tracer.closest(origin, dir, f32::INFINITY) else {
-            break;
-        };
+    while let Some(hit) = tracer.closest(origin, dir, f32::INFINITY) {
         let Some(sp) = shading_point(scene, tracer, origin, dir, &hit) else {
             break;
         };
@@ -279,7 +276,7 @@ fn trace_path(
         // Continue the path by sampling the BSDF.
         let Some(wi) = bsdf.sample(n, wo, rng) else { break };
         let pdf = bsdf.pdf(n, wo, wi);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             break;
         }
         throughput *= bsdf.eval(n, wo, wi) * (n.dot(wi) / pdf);

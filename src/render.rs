@@ -264,6 +264,9 @@ pub(crate) fn shading_point(
     })
 }
 
+/// One tile's pixels (index, radiance), traversal counters and receiver count.
+type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
+
 struct Accum(AtomicU64);
 impl Accum {
     fn add(&self, seconds: f64) {
@@ -379,7 +382,7 @@ pub fn render(
     );
     let grid = (opts.spp as f32).sqrt().ceil() as u32;
 
-    let tiles: Vec<(Vec<(u32, Vec3)>, TraversalStats, usize)> = (0..tiles_total)
+    let tiles: Vec<TileResult> = (0..tiles_total)
         .into_par_iter()
         .map(|tile| {
             let (tx, ty) = ((tile as u32 % tiles_x) * 4, (tile as u32 / tiles_x) * 4);
@@ -406,10 +409,10 @@ pub fn render(
                     let fx = x as f32 + (sx as f32 + rng.f32()) / grid as f32;
                     let fy = y as f32 + (sy as f32 + rng.f32()) / grid as f32;
                     let dir = cam.ray_direction(fx, fy);
-                    if let Some(hit) = tracer.closest(cam.origin, dir, f32::INFINITY) {
-                        if let Some(sp) = shading_point(scene, &tracer, cam.origin, dir, &hit) {
-                            points.push((k, sp, rng));
-                        }
+                    if let Some(hit) = tracer.closest(cam.origin, dir, f32::INFINITY)
+                        && let Some(sp) = shading_point(scene, &tracer, cam.origin, dir, &hit)
+                    {
+                        points.push((k, sp, rng));
                     }
                 }
                 // Direct light (and emission) at each receiver.

@@ -209,10 +209,10 @@ fn cuts_on_every_path(
         )
         .map_err(|e| e.to_string())?;
         let scalar = t.cuts(Scheme::Scalar, receivers);
-        if let Some(r) = &reference {
-            if *r != scalar {
-                return Err(format!("scalar on {isa} differs from the first path"));
-            }
+        if let Some(r) = &reference
+            && *r != scalar
+        {
+            return Err(format!("scalar on {isa} differs from the first path"));
         }
         for scheme in [Scheme::Single, Scheme::Packet, Scheme::Hybrid] {
             let c = t.cuts(scheme, receivers);

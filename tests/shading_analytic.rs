@@ -149,13 +149,25 @@ fn on_the_axis_of_a_disk() {
     }
 }
 
+/// Reduced sizes when `PBGI_QC_TESTS` asks for few cases (emulated runs).
+fn quick() -> bool {
+    std::env::var("PBGI_QC_TESTS")
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok())
+        .is_some_and(|n| n < 50)
+}
+
 #[test]
 fn every_scheme_and_path_shades_bit_identically() {
-    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(20_000, 2));
+    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(
+        if quick() { 3_000 } else { 20_000 },
+        2,
+    ));
+    let resolutions: &[usize] = if quick() { &[1, 8] } else { &[1, 4, 8, 16] };
     for jitter in [0.0, 1.0] {
-        let recs = pbgi::synthetic::receivers(24, 0.01, jitter, 4);
+        let recs = pbgi::synthetic::receivers(if quick() { 3 } else { 24 }, 0.01, jitter, 4);
         for omega in [0.01, 0.1] {
-            for res in [1, 4, 8, 16] {
+            for &res in resolutions {
                 let reference = irradiance(&tree, &recs, omega, res, Scheme::Scalar, Isa::Portable);
                 assert!(reference.iter().all(|e| e.is_finite()));
                 assert!(

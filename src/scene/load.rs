@@ -809,15 +809,15 @@ impl Mitsuba<'_> {
     }
 
     fn texture_or_color(&mut self, node: Node, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
-        if let Some(p) = self.prop(node, name) {
-            if p.tag_name().name() == "texture" {
-                self.warnings.push(format!(
-                    "{}:{}: texture for {name} not supported, 0.5 used",
-                    self.path.display(),
-                    self.line(p)
-                ));
-                return Ok(Vec3::splat(0.5));
-            }
+        if let Some(p) = self.prop(node, name)
+            && p.tag_name().name() == "texture"
+        {
+            self.warnings.push(format!(
+                "{}:{}: texture for {name} not supported, 0.5 used",
+                self.path.display(),
+                self.line(p)
+            ));
+            return Ok(Vec3::splat(0.5));
         }
         self.color(node, name, default)
     }
@@ -1087,10 +1087,10 @@ impl Mitsuba<'_> {
                 }
                 "sampler" => self.ignored.push(format!("sampler {}", self.describe(c))),
                 "transform" | "float" | "string" => {
-                    if let Some(n) = c.attribute("name") {
-                        if !matches!(n, "fov" | "fov_axis" | "to_world") {
-                            self.ignored.push(format!("sensor {}", self.describe_one(c)?));
-                        }
+                    if let Some(n) = c.attribute("name")
+                        && !matches!(n, "fov" | "fov_axis" | "to_world")
+                    {
+                        self.ignored.push(format!("sensor {}", self.describe_one(c)?));
                     }
                 }
                 other => self.ignored.push(format!("sensor <{other}>")),

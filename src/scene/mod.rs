@@ -223,23 +223,23 @@ impl Scene {
                     m.name
                 ));
             }
-            if let Some(normals) = &m.normals {
-                if normals.len() != m.positions.len() {
-                    return bad(format!(
-                        "mesh {mi} ({}) has {} normals for {} vertices",
-                        m.name,
-                        normals.len(),
-                        n
-                    ));
-                }
+            if let Some(normals) = &m.normals
+                && normals.len() != m.positions.len()
+            {
+                return bad(format!(
+                    "mesh {mi} ({}) has {} normals for {} vertices",
+                    m.name,
+                    normals.len(),
+                    n
+                ));
             }
-            if let Some(e) = m.emission {
-                if !e.is_finite() || e.min_element() < 0.0 {
-                    return bad(format!(
-                        "mesh {mi} ({}) emission {e} is not finite and ≥ 0",
-                        m.name
-                    ));
-                }
+            if let Some(e) = m.emission
+                && (!e.is_finite() || e.min_element() < 0.0)
+            {
+                return bad(format!(
+                    "mesh {mi} ({}) emission {e} is not finite and ≥ 0",
+                    m.name
+                ));
             }
         }
         for m in &self.materials {
