@@ -152,11 +152,38 @@ fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     Ok(b.build()?)
 }
 
-fn cmd_render(a: &RenderArgs) -> Res<()> {
-    let scene = resolve(&a.scene)?;
+/// A built-in scene or a file, its warnings printed.
+fn load_scene(name: &str) -> Res<pbgi::scene::Scene> {
+    let scene = resolve(name)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    Ok(scene)
+}
+
+/// A progress bar counting `unit`s; `tick(done, total)` is the library's callback shape.
+fn progress_bar(unit: &str, message: String) -> ProgressBar {
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} {{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{eta}} left"
+        ))
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(message);
+    bar
+}
+
+fn tick(bar: &ProgressBar, done: usize, total: usize) {
+    if done == 0 {
+        bar.set_length(total as u64);
+    } else {
+        bar.inc(1);
+    }
+}
+
+fn cmd_render(a: &RenderArgs) -> Res<()> {
+    let scene = load_scene(&a.scene)?;
     let opts = options(a)?;
     let out_path = a
         .output
@@ -164,21 +191,8 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
-    let bar = ProgressBar::new(0).with_style(
-        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} tiles, {eta} left")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(format!("rendering {}", scene.name));
-    let out = pool.install(|| {
-        render(&scene, &opts, &|done, total| {
-            if done == 0 {
-                bar.set_length(total as u64);
-            } else {
-                bar.inc(1);
-            }
-        })
-    })?;
+    let bar = progress_bar("tiles", format!("rendering {}", scene.name));
+    let out = pool.install(|| render(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
@@ -187,35 +201,21 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
 }
 
 fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
-    let scene = resolve(&a.scene)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
+    let scene = load_scene(&a.scene)?;
     let out_path = a
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{}-reference.exr", scene.name)));
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
-    let bar = ProgressBar::new(0).with_style(
-        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} rows, {eta} left")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(format!("path tracing {}", scene.name));
+    let bar = progress_bar("rows", format!("path tracing {}", scene.name));
     let opts = pbgi::reference::ReferenceOptions {
         spp: a.spp,
         bounces: a.bounces,
         ..Default::default()
     };
     let out = pool.install(|| {
-        pbgi::reference::render_reference(&scene, &opts, &|done, total| {
-            if done == 0 {
-                bar.set_length(total as u64);
-            } else {
-                bar.inc(1);
-            }
-        })
+        pbgi::reference::render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
     })?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
