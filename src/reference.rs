@@ -227,9 +227,6 @@ fn trace_path(
             }),
         };
         let (p, n, wo) = (sp.position, sp.normal, sp.wo);
-        // At the last vertex no BSDF sample follows to find the emitters, so
-        // next-event estimation takes the whole weight.
-        let last = depth >= max_vertices;
         // Next-event estimation: one area-light sample (MIS), every delta light.
         if let Some((q, ln, le)) = lights.sample_area(rng.f32(), rng.f32(), rng.f32()) {
             let d = q - p;
@@ -241,11 +238,7 @@ fn trace_path(
                 let f = bsdf.eval(n, wo, wi);
                 if cos_l > 0.0 && f.max_element() > 0.0 && !tracer.occluded(p, wi, dist * (1.0 - 1e-4)) {
                     let pl = lights.area_pdf(dist2, cos_l);
-                    let w = if last {
-                        1.0
-                    } else {
-                        power_heuristic(pl, bsdf.pdf(n, wo, wi))
-                    };
+                    let w = power_heuristic(pl, bsdf.pdf(n, wo, wi));
                     radiance += throughput * f * le * (n.dot(wi) * w / pl);
                 }
             }
@@ -270,10 +263,9 @@ fn trace_path(
                 radiance += throughput * bsdf.eval(n, wo, wi) * li * cos;
             }
         }
-        if last {
-            break;
-        }
-        // Continue the path by sampling the BSDF.
+        // Continue by sampling the BSDF. At the last vertex the ray only
+        // looks for emitters (the MIS partner of the light sample above);
+        // the loop stops at the vertex it hits.
         let Some(wi) = bsdf.sample(n, wo, rng) else { break };
         let pdf = bsdf.pdf(n, wo, wi);
         if pdf.is_nan() || pdf <= 0.0 {

@@ -1,0 +1,171 @@
+//! The reference path tracer: its error falls like 1/√spp, it agrees with an
+//! analytic case, and the point-based renderer agrees with it there.
+
+use glam::Vec3;
+use pbgi::reference::{ReferenceOptions, render_reference};
+use pbgi::render::{Image, RenderOptions, render};
+use pbgi::scene::builtin::cornell_box;
+use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
+
+fn rmse(a: &Image, b: &Image) -> f64 {
+    let s: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(x, y)| (*x - *y).length_squared() as f64)
+        .sum();
+    (s / a.pixels.len() as f64).sqrt()
+}
+
+fn small_box() -> Scene {
+    let mut s = cornell_box();
+    s.camera.width = 16;
+    s.camera.height = 16;
+    s
+}
+
+#[test]
+fn error_falls_like_one_over_sqrt_spp() {
+    let scene = small_box();
+    let run = |spp, seed| {
+        render_reference(
+            &scene,
+            &ReferenceOptions {
+                spp,
+                bounces: 1,
+                seed,
+            },
+            &|_, _| {},
+        )
+        .unwrap()
+        .image
+    };
+    let truth = run(4096, 1);
+    let (e16, e256) = (rmse(&run(16, 2), &truth), rmse(&run(256, 3), &truth));
+    // 16× the samples: at least 4× less error (within Monte Carlo scatter);
+    // stratified pixel samples converge faster than 1/√spp at edges.
+    let ratio = e16 / e256;
+    assert!(
+        (3.0..16.0).contains(&ratio),
+        "RMSE 16 spp {e16}, 256 spp {e256}: ratio {ratio}"
+    );
+}
+
+/// A diffuse floor (albedo ρ) under a large emitting ceiling (radiance L)
+/// facing it: the floor's radiance tends to ρ·L.
+fn floor_under_sky(rho: f32, l: f32) -> Scene {
+    let quad = |y: f32, down: bool, emission| {
+        let s = 10.0;
+        let mut positions = vec![
+            Vec3::new(-s, y, -s),
+            Vec3::new(s, y, -s),
+            Vec3::new(s, y, s),
+            Vec3::new(-s, y, s),
+        ];
+        if down {
+            positions.reverse();
+        }
+        Mesh {
+            name: format!("y{y}"),
+            positions,
+            triangles: vec![[0, 2, 1], [0, 3, 2]],
+            normals: None,
+            material: 0,
+            emission,
+        }
+    };
+    Scene {
+        name: "floor-under-sky".into(),
+        meshes: vec![quad(0.0, false, None), quad(1.0, true, Some(Vec3::splat(l)))],
+        materials: vec![Material::diffuse("floor", Vec3::splat(rho))],
+        lights: vec![],
+        camera: Camera {
+            origin: Vec3::new(0.0, 0.5, 0.0),
+            target: Vec3::new(0.0, 0.0, 0.001),
+            up: Vec3::Z,
+            fov_degrees: 10.0,
+            fov_axis: FovAxis::Smaller,
+            width: 8,
+            height: 8,
+        },
+        warnings: vec![],
+    }
+}
+
+#[test]
+fn floor_under_a_glowing_ceiling() {
+    let (rho, l) = (0.5, 2.0);
+    let scene = floor_under_sky(rho, l);
+    // Check the winding: the floor faces up, the ceiling down.
+    let n = |m: &Mesh| {
+        let t = m.triangles[0].map(|i| m.positions[i as usize]);
+        (t[1] - t[0]).cross(t[2] - t[0]).normalize()
+    };
+    assert!(n(&scene.meshes[0]).y > 0.99 && n(&scene.meshes[1]).y < -0.99);
+    let out = render_reference(
+        &scene,
+        &ReferenceOptions {
+            spp: 256,
+            bounces: 0,
+            seed: 5,
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let mean = out.image.pixels.iter().map(|p| p.x).sum::<f32>() / out.image.pixels.len() as f32;
+    // The 20 × 20 ceiling at height 1 covers over 99 % of the cosine lobe; tolerance 3 %.
+    assert!(
+        (mean - rho * l).abs() < 0.03 * rho * l,
+        "path tracer {mean} vs ρL {}",
+        rho * l
+    );
+    // The point-based renderer's direct light (shadow rays) agrees.
+    let pb = render(
+        &scene,
+        &RenderOptions {
+            bounces: 0,
+            spp: 64,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let mean_pb = pb.image.pixels.iter().map(|p| p.x).sum::<f32>() / pb.image.pixels.len() as f32;
+    assert!(
+        (mean_pb - rho * l).abs() < 0.03 * rho * l,
+        "point-based {mean_pb} vs ρL {}",
+        rho * l
+    );
+}
+
+#[test]
+fn point_based_and_path_traced_cornell_boxes_agree() {
+    let scene = small_box();
+    let truth = render_reference(
+        &scene,
+        &ReferenceOptions {
+            spp: 1024,
+            bounces: 1,
+            seed: 9,
+        },
+        &|_, _| {},
+    )
+    .unwrap()
+    .image;
+    let pb = render(
+        &scene,
+        &RenderOptions {
+            spp: 16,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap()
+    .image;
+    let mean =
+        |i: &Image| i.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>() / i.pixels.len() as f64;
+    // Mean brightness within 10 % (the light itself is in view in both).
+    let (a, b) = (mean(&pb), mean(&truth));
+    assert!((a - b).abs() < 0.1 * b, "point-based mean {a} vs path traced {b}");
+    eprintln!("Cornell box 16×16: relative RMSE {:.3}", rmse(&pb, &truth) / b);
+}
