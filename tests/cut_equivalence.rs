@@ -1,197 +1,77 @@
-//! Property tests: single, packet and hybrid give exactly the scalar cut (same
-//! splats, same discards) on every instruction-set path this CPU runs, on
-//! random and adversarial clouds; the cut invariants hold; scaling the input
-//! by 2^k leaves the cut unchanged.
+//! Property tests of the cut: single, packet and hybrid give exactly the scalar
+//! cut (sorted splats and discards) on every instruction-set path this CPU
+//! runs, for every hybrid threshold, on random and adversarial clouds
+//! (duplicates, sheets, lines, mixed scales, wild radii, lattices, extreme
+//! coordinates); the invariants of DESIGN §2 hold (checked independently of
+//! `Cut::check`); the cut follows the node test (re-derived in f64) and never
+//! discards a visible disk; scaling the input by 2^k changes neither the
+//! tree nor the cut.
 //!
-//! `PBGI_QC_TESTS` sets the number of cases per property (default 150).
+//! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
 
+mod common;
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+use common::{Case, Shape, cases, invariants, path_names, qc, reduced, semantics, surfels_below};
 use glam::Vec3;
-use pbgi::{Cut, CutOptions, Isa, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
-use quickcheck::{Arbitrary, Gen, QuickCheck, TestResult};
+use pbgi::{
+    Cut, CutOptions, CutRecorder, CutSink, Isa, NodeId, PointCloud, Receiver, Scheme, SplatCounter, Surfel,
+    Traversal, Tree,
+};
+use quickcheck::{Arbitrary, Gen, TestResult};
 
-fn cases() -> u64 {
-    std::env::var("PBGI_QC_TESTS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(150)
-}
+/// A sink without discards (the kernels skip that bookkeeping: another code path).
+struct SplatsOnly(Vec<Vec<NodeId>>);
 
-fn check(name: &str, prop: fn(Input) -> TestResult) {
-    let paths: Vec<_> = Isa::available().iter().map(|i| i.name()).collect();
-    eprintln!("{name}: {} cases on paths {}", cases(), paths.join(", "));
-    QuickCheck::new()
-        .tests(cases())
-        .max_tests(cases() * 10)
-        .quickcheck(prop);
-}
-
-/// Kinds of cloud, from benign to adversarial.
-#[derive(Clone, Copy, Debug)]
-enum Shape {
-    Uniform,
-    Duplicates,
-    Coplanar,
-    Collinear,
-    MixedScales,
-    WildRadii,
-    Box,
-}
-
-#[derive(Clone, Debug)]
-struct Input {
-    shape: Shape,
-    surfels: Vec<Surfel>,
-    receivers: Vec<(Vec3, Vec3)>,
-    omega: f32,
-    threshold: u32,
-}
-
-fn f(g: &mut Gen, lo: f32, hi: f32) -> f32 {
-    let u = (u32::arbitrary(g) >> 8) as f32 / (1u32 << 24) as f32;
-    lo + (hi - lo) * u
-}
-
-fn unit(g: &mut Gen) -> Vec3 {
-    loop {
-        let v = Vec3::new(f(g, -1.0, 1.0), f(g, -1.0, 1.0), f(g, -1.0, 1.0));
-        let l = v.length();
-        if l > 0.1 && l <= 1.0 {
-            return v / l;
-        }
+impl CutSink for SplatsOnly {
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        self.0[receiver].push(node);
     }
 }
 
-impl Arbitrary for Input {
-    fn arbitrary(g: &mut Gen) -> Self {
-        let shapes = [
-            Shape::Uniform,
-            Shape::Duplicates,
-            Shape::Coplanar,
-            Shape::Collinear,
-            Shape::MixedScales,
-            Shape::WildRadii,
-            Shape::Box,
-        ];
-        let shape = *g.choose(&shapes).unwrap();
-        let n = 1 + usize::arbitrary(g) % 400;
-        let radiance = Vec3::ONE;
-        let mut surfels = Vec::with_capacity(n);
-        match shape {
-            Shape::Box => {
-                let cloud = pbgi::synthetic::box_with_blocks(n.max(30), u64::arbitrary(g));
-                surfels = cloud.into_surfels();
-            }
-            _ => {
-                let p0 = Vec3::new(f(g, -1.0, 1.0), f(g, -1.0, 1.0), f(g, -1.0, 1.0));
-                let axis = unit(g);
-                for i in 0..n {
-                    let (position, normal, radius) = match shape {
-                        Shape::Uniform => (
-                            Vec3::new(f(g, -1.0, 1.0), f(g, -1.0, 1.0), f(g, -1.0, 1.0)),
-                            unit(g),
-                            f(g, 0.01, 0.1),
-                        ),
-                        Shape::Duplicates => (p0, if i % 3 == 0 { axis } else { unit(g) }, 0.05),
-                        Shape::Coplanar => {
-                            let (t, b) = axis.any_orthonormal_pair();
-                            (
-                                p0 + t * f(g, -1.0, 1.0) + b * f(g, -1.0, 1.0),
-                                axis,
-                                f(g, 0.01, 0.1),
-                            )
-                        }
-                        Shape::Collinear => (p0 + axis * (i as f32 * 0.01), unit(g), 0.02),
-                        Shape::MixedScales => {
-                            let s = if i % 2 == 0 { 1e-3 } else { 1e3 };
-                            (
-                                Vec3::new(f(g, -1.0, 1.0), f(g, -1.0, 1.0), f(g, -1.0, 1.0)) * s,
-                                unit(g),
-                                0.05 * s,
-                            )
-                        }
-                        Shape::WildRadii => {
-                            let r = if i % 2 == 0 { 1e-6 } else { 10.0 };
-                            (
-                                Vec3::new(f(g, -1.0, 1.0), f(g, -1.0, 1.0), f(g, -1.0, 1.0)),
-                                unit(g),
-                                r,
-                            )
-                        }
-                        Shape::Box => unreachable!(),
-                    };
-                    surfels.push(Surfel {
-                        position,
-                        normal,
-                        radius,
-                        radiance,
-                    });
-                }
-            }
-        }
-        // Receivers: near the cloud, some on surfels, some at its centre.
-        let m = 1 + usize::arbitrary(g) % 40;
-        let receivers = (0..m)
-            .map(|i| {
-                let p = match i % 3 {
-                    0 => surfels[usize::arbitrary(g) % surfels.len()].position,
-                    1 => surfels[0].position * 0.5,
-                    _ => Vec3::new(f(g, -2.0, 2.0), f(g, -2.0, 2.0), f(g, -2.0, 2.0)),
-                };
-                (p, unit(g))
-            })
-            .collect();
-        let omegas = [0.0, 1e-6, 0.01, 0.05, 0.3, 1e3];
-        let omega = if bool::arbitrary(g) {
-            *g.choose(&omegas).unwrap()
-        } else {
-            f(g, 0.0, 1.0)
-        };
-        let threshold = u32::arbitrary(g) % 18;
-        Input {
-            shape,
-            surfels,
-            receivers,
-            omega,
-            threshold,
-        }
+/// The first difference between two cut lists, for messages.
+fn first_difference(got: &[Cut], want: &[Cut]) -> Option<String> {
+    if got.len() != want.len() {
+        return Some(format!("{} cuts, expected {}", got.len(), want.len()));
     }
+    let i = (0..got.len()).find(|&i| got[i] != want[i])?;
+    let diff = |a: &[NodeId], b: &[NodeId]| {
+        a.iter()
+            .filter(|x| !b.contains(x))
+            .take(8)
+            .copied()
+            .collect::<Vec<_>>()
+    };
+    Some(format!(
+        "receiver {i}: splats +{:?} −{:?}, discards +{:?} −{:?}",
+        diff(&got[i].splats, &want[i].splats),
+        diff(&want[i].splats, &got[i].splats),
+        diff(&got[i].discards, &want[i].discards),
+        diff(&want[i].discards, &got[i].discards),
+    ))
 }
 
-/// Independent check of DESIGN §2's invariants from parent links.
-fn invariants(tree: &Tree, cut: &Cut) -> Result<(), String> {
-    let parents = tree.parents();
-    let mut marked = vec![false; tree.len()];
-    for &k in cut.splats.iter().chain(&cut.discards) {
-        if std::mem::replace(&mut marked[k as usize], true) {
-            return Err(format!("node {k} reported twice"));
-        }
+fn traversal(tree: &Tree, omega: f32, threshold: u32, isa: Isa) -> Result<Traversal<'_>, String> {
+    let t = Traversal::new(
+        tree,
+        CutOptions {
+            max_solid_angle: omega,
+            hybrid_threshold: threshold,
+            isa: Some(isa),
+        },
+    )
+    .map_err(|e| format!("Traversal::new on {isa}: {e}"))?;
+    if t.isa() != isa {
+        return Err(format!("asked for {isa}, runs on {}", t.isa()));
     }
-    for k in 0..tree.len() as u32 {
-        // Marked ancestors-or-self of every leaf: exactly one.
-        if tree.is_leaf(k) {
-            let (mut n, mut count) = (Some(k), 0);
-            while let Some(x) = n {
-                count += marked[x as usize] as u32;
-                n = parents[x as usize];
-            }
-            if count != 1 {
-                return Err(format!("leaf {k} has {count} cut ancestors"));
-            }
-        }
-    }
-    for &k in &cut.splats {
-        let mut n = parents[k as usize];
-        while let Some(x) = n {
-            if marked[x as usize] {
-                return Err(format!("splatted node {k} lies below cut node {x}"));
-            }
-            n = parents[x as usize];
-        }
-    }
-    Ok(())
+    Ok(t)
 }
 
-fn cuts_on_every_path(
+/// Every scheme on every path against the scalar cut of the first path, through
+/// `cuts`, through `run` (whole slice, stats), with a discard-free sink and
+/// with the splat counter. Returns the scalar cuts.
+fn all_paths_agree(
     tree: &Tree,
     receivers: &[Receiver],
     omega: f32,
@@ -199,30 +79,79 @@ fn cuts_on_every_path(
 ) -> Result<Vec<Cut>, String> {
     let mut reference: Option<Vec<Cut>> = None;
     for isa in Isa::available() {
-        let t = Traversal::new(
-            tree,
-            CutOptions {
-                max_solid_angle: omega,
-                hybrid_threshold: threshold,
-                isa: Some(isa),
-            },
-        )
-        .map_err(|e| e.to_string())?;
+        let t = traversal(tree, omega, threshold, isa)?;
         let scalar = t.cuts(Scheme::Scalar, receivers);
         if let Some(r) = &reference
-            && *r != scalar
+            && let Some(d) = first_difference(&scalar, r)
         {
-            return Err(format!("scalar on {isa} differs from the first path"));
+            return Err(format!("scalar on {isa} differs from the first path at {d}"));
         }
         for scheme in [Scheme::Single, Scheme::Packet, Scheme::Hybrid] {
-            let c = t.cuts(scheme, receivers);
-            if let Some(i) = (0..c.len()).find(|&i| c[i] != scalar[i]) {
+            if let Some(d) = first_difference(&t.cuts(scheme, receivers), &scalar) {
+                return Err(format!("{scheme} on {isa} (cuts) differs from scalar at {d}"));
+            }
+        }
+
+        // The counters: every scheme tests the same (receiver, node) pairs,
+        // the cut nodes and their strict ancestors (2|C| − 1 in a full binary tree).
+        let expected_tests: u64 = if tree.is_empty() {
+            0
+        } else {
+            scalar
+                .iter()
+                .map(|c| 2 * (c.splats.len() + c.discards.len()) as u64 - 1)
+                .sum()
+        };
+        let total_splats: u64 = scalar.iter().map(|c| c.splats.len() as u64).sum();
+        for scheme in Scheme::ALL {
+            let mut rec = CutRecorder::new(receivers.len());
+            let stats = t.run(scheme, receivers, &mut rec);
+            if let Some(d) = first_difference(&rec.into_cuts(), &scalar) {
+                return Err(format!("{scheme} on {isa} (run) differs from scalar at {d}"));
+            }
+            let fail = |what: &str| Err(format!("{scheme} on {isa}: {what}: {stats:?}"));
+            if stats.receivers != receivers.len() as u64 {
+                return fail("receiver count");
+            }
+            if stats.node_tests != expected_tests {
+                return fail(&format!("node tests, expected {expected_tests}"));
+            }
+            match scheme {
+                Scheme::Scalar if stats.lane_slots != 0 || stats.active_lanes != 0 => return fail("lanes"),
+                Scheme::Scalar => {}
+                _ if stats.lane_slots % 16 != 0 || stats.active_lanes != stats.node_tests => {
+                    return fail("lanes");
+                }
+                _ => {}
+            }
+            let chunks = receivers.len().div_ceil(16) as u64;
+            let switches_ok = match (scheme, threshold) {
+                (Scheme::Hybrid, 0 | 1) => stats.switches == 0,
+                (Scheme::Hybrid, 17) => stats.switches == if tree.is_empty() { 0 } else { chunks },
+                (Scheme::Hybrid, _) => true,
+                _ => stats.switches == 0,
+            };
+            if !switches_ok {
+                return fail(&format!("switches with threshold {threshold}"));
+            }
+
+            let mut only = SplatsOnly(vec![Vec::new(); receivers.len()]);
+            t.run(scheme, receivers, &mut only);
+            for (i, mut s) in only.0.into_iter().enumerate() {
+                s.sort_unstable();
+                if s != scalar[i].splats {
+                    return Err(format!(
+                        "{scheme} on {isa} without discards: receiver {i} splats {s:?}, scalar {:?}",
+                        scalar[i].splats
+                    ));
+                }
+            }
+            let mut count = SplatCounter::default();
+            t.run(scheme, receivers, &mut count);
+            if count.splats != total_splats {
                 return Err(format!(
-                    "{scheme} on {isa} differs at receiver {i}: {} splats / {} discards vs scalar {} / {}",
-                    c[i].splats.len(),
-                    c[i].discards.len(),
-                    scalar[i].splats.len(),
-                    scalar[i].discards.len()
+                    "{scheme} on {isa}: splat counter {} vs {total_splats}",
+                    count.splats
                 ));
             }
         }
@@ -231,85 +160,292 @@ fn cuts_on_every_path(
     Ok(reference.unwrap_or_default())
 }
 
-fn prop_equivalence(input: Input) -> TestResult {
-    let tree = Tree::build(&PointCloud::new(input.surfels.clone()).expect("valid surfels"));
-    let receivers = Receiver::from_pairs(input.receivers.iter().copied()).expect("valid receivers");
-    match cuts_on_every_path(&tree, &receivers, input.omega, input.threshold) {
-        Err(e) => TestResult::error(format!("{:?} Ω {}: {e}", input.shape, input.omega)),
-        Ok(cuts) => {
-            for (i, c) in cuts.iter().enumerate() {
-                if let Err(e) = invariants(&tree, c).and(c.check(&tree)) {
-                    return TestResult::error(format!("{:?} receiver {i}: {e}", input.shape));
-                }
-            }
-            TestResult::passed()
+static EQUIVALENCE_RECEIVERS: AtomicU64 = AtomicU64::new(0);
+
+fn prop_equivalence(case: Case) -> TestResult {
+    let surfels = case.surfels();
+    let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
+    let receivers = case.receivers(&surfels);
+    EQUIVALENCE_RECEIVERS.fetch_add(receivers.len() as u64, Relaxed);
+    let cuts = match all_paths_agree(&tree, &receivers, case.omega, case.threshold) {
+        Ok(c) => c,
+        Err(e) => return TestResult::error(e),
+    };
+    let parents = tree.parents();
+    for (i, c) in cuts.iter().enumerate() {
+        if let Err(e) = invariants(&tree, &parents, c) {
+            return TestResult::error(format!("receiver {i} {:?}: {e}", receivers[i]));
+        }
+        if let Err(e) = c.check(&tree) {
+            return TestResult::error(format!("receiver {i} {:?}: Cut::check: {e}", receivers[i]));
         }
     }
+    TestResult::passed()
 }
 
 #[test]
 fn schemes_equal_scalar_on_every_path() {
-    check("cut equivalence", prop_equivalence);
+    qc("cut equivalence", prop_equivalence as fn(Case) -> TestResult);
+    let n = EQUIVALENCE_RECEIVERS.load(Relaxed);
+    eprintln!(
+        "cut equivalence: {n} receivers (+ shrinking) × 4 schemes × 4 sinks on paths {}",
+        path_names()
+    );
+    assert!(n >= cases(), "too few receivers exercised: {n}");
 }
 
-fn prop_scale(input: Input) -> TestResult {
-    let k = (input.receivers.len() as i32 % 41) - 20; // 2^-20 .. 2^20
-    let s = 2f32.powi(k);
-    let scaled: Vec<Surfel> = input
-        .surfels
-        .iter()
-        .map(|x| Surfel {
-            position: x.position * s,
-            radius: x.radius * s,
-            ..*x
-        })
-        .collect();
-    let tree = Tree::build(&PointCloud::new(input.surfels.clone()).unwrap());
-    let tree_s = Tree::build(&PointCloud::new(scaled).unwrap());
-    let recs = Receiver::from_pairs(input.receivers.iter().copied()).unwrap();
-    let recs_s = Receiver::from_pairs(input.receivers.iter().map(|&(p, n)| (p * s, n))).unwrap();
-    let opts = CutOptions {
-        max_solid_angle: input.omega,
-        ..Default::default()
-    };
-    let a = Traversal::new(&tree, opts).unwrap().cuts(Scheme::Packet, &recs);
-    let b = Traversal::new(&tree_s, opts)
-        .unwrap()
-        .cuts(Scheme::Packet, &recs_s);
-    if a == b {
-        TestResult::passed()
-    } else {
-        TestResult::error(format!("{:?}: cut changes under scale 2^{k}", input.shape))
+fn prop_semantics(case: Case) -> TestResult {
+    let surfels = case.surfels();
+    let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
+    let receivers = case.receivers(&surfels);
+    let t = traversal(&tree, case.omega, case.threshold, Isa::best()).unwrap();
+    let cuts = t.cuts(Scheme::Hybrid, &receivers);
+    let (parents, below) = (tree.parents(), surfels_below(&tree));
+    for (i, (r, c)) in receivers.iter().zip(&cuts).enumerate() {
+        if let Err(e) = semantics(&tree, &parents, &below, &surfels, r, case.omega, c) {
+            return TestResult::error(format!("receiver {i} {r:?}: {e}"));
+        }
     }
+    TestResult::passed()
 }
 
 #[test]
-fn scaling_by_powers_of_two_keeps_the_cut() {
-    check("scale invariance", prop_scale);
+fn cuts_follow_the_node_test_and_discard_nothing_visible() {
+    qc("cut semantics (f64)", prop_semantics as fn(Case) -> TestResult);
+}
+
+/// Breaks a valid cut in one of several ways: both checkers must notice.
+/// Also refines a splat into its children, which stays valid: both must accept.
+fn prop_broken_cuts_are_rejected(case: Case) -> TestResult {
+    let surfels = case.surfels();
+    let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
+    let receivers = case.receivers(&surfels);
+    let t = traversal(&tree, case.omega, case.threshold, Isa::Portable).unwrap();
+    let parents = tree.parents();
+    let mut rng = common::Rng::new(case.receivers.seed);
+    if tree.is_empty() {
+        let c = Cut {
+            splats: vec![0],
+            discards: vec![],
+        };
+        return TestResult::from_bool(invariants(&tree, &parents, &c).is_err() && c.check(&tree).is_err());
+    }
+    let insert = |v: &mut Vec<NodeId>, k: NodeId| {
+        let at = v.partition_point(|&x| x < k);
+        v.insert(at, k);
+    };
+    for (i, cut) in t.cuts(Scheme::Scalar, &receivers).into_iter().enumerate().take(8) {
+        let all: Vec<NodeId> = cut.splats.iter().chain(&cut.discards).copied().collect();
+        let mut broken = Vec::new();
+        // Drop one cut node: its leaves lose their cover.
+        let mut c = cut.clone();
+        let k = rng.pick(&all);
+        c.splats.retain(|&x| x != k);
+        c.discards.retain(|&x| x != k);
+        broken.push(("dropped", k, c));
+        // Add a child of an inner cut node: it lies below a cut node.
+        if let Some(&k) = all.iter().find(|&&k| tree.node(k).children.is_some()) {
+            let mut c = cut.clone();
+            let child = tree.node(k).children.unwrap() + rng.below(2) as NodeId;
+            insert(&mut c.splats, child);
+            broken.push(("added child", child, c));
+        }
+        // Add the parent of a non-root cut node: its leaves are covered twice.
+        let k = rng.pick(&all);
+        if let Some(p) = parents[k as usize] {
+            let mut c = cut.clone();
+            insert(
+                if rng.chance(0.5) {
+                    &mut c.splats
+                } else {
+                    &mut c.discards
+                },
+                p,
+            );
+            broken.push(("added parent", p, c));
+        }
+        // Report a splat as a discard too.
+        if let Some(&k) = cut.splats.first() {
+            let mut c = cut.clone();
+            insert(&mut c.discards, k);
+            broken.push(("splat also discarded", k, c));
+        }
+        for (what, k, c) in broken {
+            let mine = invariants(&tree, &parents, &c);
+            let theirs = c.check(&tree);
+            if mine.is_ok() || theirs.is_ok() {
+                return TestResult::error(format!(
+                    "receiver {i}: cut with {what} node {k} accepted (independent: {mine:?}, Cut::check: {theirs:?})"
+                ));
+            }
+        }
+        // Refining a splat into its two children keeps a valid cut.
+        if let Some(&k) = cut.splats.iter().find(|&&k| tree.node(k).children.is_some()) {
+            let mut c = cut.clone();
+            c.splats.retain(|&x| x != k);
+            let l = tree.node(k).children.unwrap();
+            insert(&mut c.splats, l);
+            insert(&mut c.splats, l + 1);
+            if let Err(e) = invariants(&tree, &parents, &c).and(c.check(&tree)) {
+                return TestResult::error(format!("receiver {i}: refined cut rejected: {e}"));
+            }
+        }
+    }
+    TestResult::passed()
+}
+
+#[test]
+fn broken_cuts_are_rejected_by_both_checkers() {
+    qc(
+        "invariant checkers on broken cuts",
+        prop_broken_cuts_are_rejected as fn(Case) -> TestResult,
+    );
+}
+
+/// A case and a power of two to scale it by.
+#[derive(Clone, Debug)]
+struct Scaled {
+    case: Case,
+    k: i32,
+}
+
+impl Arbitrary for Scaled {
+    fn arbitrary(g: &mut Gen) -> Self {
+        Scaled {
+            case: Case::arbitrary(g),
+            k: (u32::arbitrary(g) % 41) as i32 - 20,
+        }
+    }
+    fn shrink(&self) -> Box<dyn Iterator<Item = Self>> {
+        let k = self.k;
+        Box::new(self.case.shrink().map(move |case| Scaled { case, k }))
+    }
+}
+
+fn prop_scale(input: Scaled) -> TestResult {
+    let Scaled { case, k } = input;
+    // Coordinates of 1e15 or radii of 1e-40 under- or overflow when scaled.
+    if case.cloud.shape == Shape::Extreme {
+        return TestResult::discard();
+    }
+    let s = 2f32.powi(k);
+    let surfels = case.surfels();
+    let scaled = common::scale_cloud(&surfels, s);
+    let tree = Tree::build(&PointCloud::new(surfels.clone()).unwrap());
+    let tree_s = Tree::build(&PointCloud::new(scaled).unwrap());
+    if tree.len() != tree_s.len() || tree.depth() != tree_s.depth() {
+        return TestResult::error(format!("tree shape changes under 2^{k}"));
+    }
+    for n in 0..tree.len() as NodeId {
+        let (a, b) = (tree.node(n), tree_s.node(n));
+        let want = pbgi::NodeView {
+            center: a.center * s,
+            radius: a.radius * s,
+            area: a.area * s * s,
+            ..a
+        };
+        if b != want {
+            return TestResult::error(format!("node {n} under 2^{k}: {b:?}, expected {want:?}"));
+        }
+    }
+    let receivers = case.receivers(&surfels);
+    let receivers_s: Vec<Receiver> = receivers
+        .iter()
+        .map(|r| Receiver::new(r.position() * s, r.normal()).unwrap())
+        .collect();
+    let reference = traversal(&tree, case.omega, case.threshold, Isa::Portable)
+        .unwrap()
+        .cuts(Scheme::Scalar, &receivers);
+    for isa in Isa::available() {
+        let t = traversal(&tree_s, case.omega, case.threshold, isa).unwrap();
+        for scheme in Scheme::ALL {
+            if let Some(d) = first_difference(&t.cuts(scheme, &receivers_s), &reference) {
+                return TestResult::error(format!("{scheme} on {isa}: cut changes under 2^{k}: {d}"));
+            }
+        }
+    }
+    TestResult::passed()
+}
+
+#[test]
+fn scaling_by_powers_of_two_keeps_tree_and_cut() {
+    qc("scale equivariance", prop_scale as fn(Scaled) -> TestResult);
+}
+
+/// Every hybrid threshold on every path, on a box with incoherent packets and
+/// a receiver count that is not a multiple of 16.
+#[test]
+fn every_hybrid_threshold_on_every_path() {
+    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(
+        if reduced() { 500 } else { 3000 },
+        21,
+    ));
+    let mut receivers = pbgi::synthetic::receivers(if reduced() { 3 } else { 20 }, 0.02, 0.7, 4);
+    receivers.truncate(receivers.len() - 9);
+    let parents = tree.parents();
+    for omega in [0.0, 0.02, 0.2] {
+        let t = traversal(&tree, omega, 2, Isa::Portable).unwrap();
+        let scalar = t.cuts(Scheme::Scalar, &receivers);
+        for c in &scalar {
+            invariants(&tree, &parents, c).unwrap();
+        }
+        for isa in Isa::available() {
+            for threshold in 0..=17 {
+                let t = traversal(&tree, omega, threshold, isa).unwrap();
+                let mut rec = CutRecorder::new(receivers.len());
+                let stats = t.run(Scheme::Hybrid, &receivers, &mut rec);
+                if let Some(d) = first_difference(&rec.into_cuts(), &scalar) {
+                    panic!("hybrid threshold {threshold} on {isa}, Ω {omega}: {d}");
+                }
+                // 0 and 1 never switch (no entry has fewer than one active lane); 17
+                // switches every packet at the root.
+                match threshold {
+                    0 | 1 => assert_eq!(stats.switches, 0, "threshold {threshold}"),
+                    17 => assert_eq!(stats.switches, receivers.len().div_ceil(16) as u64),
+                    _ => {}
+                }
+            }
+        }
+    }
+    eprintln!(
+        "hybrid thresholds 0..=17: {} receivers × 3 Ω on paths {}",
+        receivers.len(),
+        path_names()
+    );
 }
 
 /// Thousands of receivers per scheme on a realistic cloud, coherent and not.
 #[test]
 fn thousands_of_receivers_on_the_box() {
-    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(20_000, 5));
-    let tiles = if cases() < 50 { 16 } else { 128 };
+    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(
+        if reduced() { 2000 } else { 20_000 },
+        5,
+    ));
+    let tiles = if reduced() { 8 } else { 128 };
+    let parents = tree.parents();
     for jitter in [0.0, 1.0] {
         let receivers = pbgi::synthetic::receivers(tiles, 0.01, jitter, 11);
         for omega in [0.0, 0.02, 0.2] {
-            let cuts = cuts_on_every_path(&tree, &receivers, omega, 2).unwrap();
-            for c in cuts.iter().take(64) {
-                invariants(&tree, c).unwrap();
+            let cuts = all_paths_agree(&tree, &receivers, omega, 2).unwrap();
+            for (i, c) in cuts.iter().enumerate() {
+                invariants(&tree, &parents, c).unwrap_or_else(|e| panic!("receiver {i}: {e}"));
             }
+            let inner = cuts
+                .iter()
+                .flat_map(|c| &c.splats)
+                .filter(|&&k| !tree.is_leaf(k))
+                .count();
             assert!(
-                cuts.iter().any(|c| !c.splats.is_empty()),
-                "Ω {omega}: empty cuts prove nothing"
+                cuts.iter().all(|c| !c.splats.is_empty()),
+                "Ω {omega}: a receiver inside the box sees nothing"
             );
+            assert_eq!(inner == 0, omega == 0.0, "Ω {omega}: {inner} inner splats");
         }
     }
     eprintln!(
-        "box: {} receivers × 3 Ω × 2 sets on paths {:?}",
+        "box: {} receivers × 3 Ω × 2 sets × 4 schemes on paths {}",
         tiles * 16,
-        Isa::available()
+        path_names()
     );
 }
 
@@ -322,22 +458,50 @@ fn hundred_thousand_coincident_surfels() {
         radiance: Vec3::ONE,
     };
     let tree = Tree::build(&PointCloud::new(vec![s; 100_000]).unwrap());
-    assert_eq!(tree.len(), 199_999);
-    assert!(tree.depth() <= 17, "depth {}", tree.depth());
     let r = Receiver::from_pairs([
         (Vec3::new(0.5, 0.5, 1.0), -Vec3::Z),
+        (Vec3::new(0.5, 0.5, 1.0), Vec3::Z),
+        (Vec3::new(0.5, 0.5, 0.0), Vec3::Z),
         (Vec3::new(0.5, 0.5, 0.5), Vec3::Z),
     ])
     .unwrap();
-    let cuts = cuts_on_every_path(&tree, &r, 0.05, 2).unwrap();
-    invariants(&tree, &cuts[0]).unwrap();
-    // From above, the whole cluster is one small splat... of solid angle π(0.01)²/0.25 < Ω: the root.
-    assert_eq!(cuts[0].splats, vec![0]);
+    let cuts = all_paths_agree(&tree, &r, 0.05, 2).unwrap();
+    let parents = tree.parents();
+    for c in &cuts {
+        invariants(&tree, &parents, c).unwrap();
+    }
+    // From above, the cluster subtends π(0.01)²/0.25 < Ω: the root is the cut.
+    assert_eq!(
+        cuts[0],
+        Cut {
+            splats: vec![0],
+            discards: vec![]
+        }
+    );
+    // Facing away from it: below the tangent plane.
+    assert_eq!(
+        cuts[1],
+        Cut {
+            splats: vec![],
+            discards: vec![0]
+        }
+    );
+    // Below it, it faces away.
+    assert_eq!(
+        cuts[2],
+        Cut {
+            splats: vec![],
+            discards: vec![0]
+        }
+    );
+    // At the cluster itself (d = 0): every leaf.
+    assert_eq!(cuts[3].splats.len(), 100_000);
+    eprintln!("coincident surfels: paths {}", path_names());
 }
 
 #[test]
 fn deep_chain_does_not_overflow() {
-    // Surfels along a line at doubling distances: median splits keep depth ⌈log₂ n⌉.
+    // Surfels along a line at growing distances: median splits keep depth ⌈log₂ n⌉.
     let surfels: Vec<_> = (0..4096)
         .map(|i| Surfel {
             position: Vec3::new(1.001f32.powi(i), 0.0, 0.0),
@@ -348,6 +512,12 @@ fn deep_chain_does_not_overflow() {
         .collect();
     let tree = Tree::build(&PointCloud::new(surfels).unwrap());
     assert_eq!(tree.depth(), 12);
-    let r = Receiver::from_pairs([(Vec3::new(1.0, 1.0, 0.0), -Vec3::Y)]).unwrap();
-    cuts_on_every_path(&tree, &r, 0.0, 2).unwrap();
+    let r = Receiver::from_pairs([
+        (Vec3::new(1.0, 1.0, 0.0), -Vec3::Y),
+        (Vec3::new(3.0, 1.0, 0.0), -Vec3::Y),
+    ])
+    .unwrap();
+    let cuts = all_paths_agree(&tree, &r, 0.0, 2).unwrap();
+    assert_eq!(cuts[0].splats.len(), 4096);
+    eprintln!("deep chain: paths {}", path_names());
 }

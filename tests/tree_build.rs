@@ -1,0 +1,235 @@
+//! Property tests of the bounding-sphere hierarchy on random and adversarial
+//! clouds: shape (2n − 1 nodes, depth ⌈log₂ n⌉, parent links), the leaves a
+//! permutation of the surfels, every sphere holding its disks, areas, normal
+//! cones and means matching the surfels below, and a deterministic build.
+//!
+//! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
+
+mod common;
+
+use common::{TreeCase, parents_from_nodes, path_names, qc, reduced, surfels_below};
+use glam::{DVec3, Vec3};
+use pbgi::{NodeId, PointCloud, Surfel, Tree};
+use quickcheck::TestResult;
+
+fn ceil_log2(n: usize) -> usize {
+    (usize::BITS - (n - 1).leading_zeros()) as usize
+}
+
+/// Levels below the root, walked.
+fn walked_depth(tree: &Tree) -> usize {
+    let mut depth = vec![0usize; tree.len()];
+    let mut max = 0;
+    for k in 0..tree.len() as NodeId {
+        if let Some(l) = tree.node(k).children {
+            for c in [l, l + 1] {
+                depth[c as usize] = depth[k as usize] + 1;
+                max = max.max(depth[c as usize]);
+            }
+        }
+    }
+    max
+}
+
+/// Everything the tree promises about itself, or the first broken promise.
+#[allow(clippy::len_zero)] // `len` and `is_empty` are both under test
+fn check_tree(surfels: &[Surfel], tree: &Tree) -> Result<(), String> {
+    let n = surfels.len();
+    if n == 0 {
+        return if tree.is_empty() && tree.len() == 0 && tree.depth() == 0 && tree.parents().is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "empty cloud: {} nodes, depth {}",
+                tree.len(),
+                tree.depth()
+            ))
+        };
+    }
+    if tree.len() != 2 * n - 1 {
+        return Err(format!("{} nodes for {n} surfels", tree.len()));
+    }
+    let depth = walked_depth(tree);
+    if tree.depth() != depth || depth != ceil_log2(n) {
+        return Err(format!(
+            "depth(): {}, walked: {depth}, ⌈log₂ {n}⌉ = {}",
+            tree.depth(),
+            ceil_log2(n)
+        ));
+    }
+    let parents = tree.parents();
+    if parents != parents_from_nodes(tree) {
+        return Err("parents() disagrees with node(k).children".into());
+    }
+    if parents[0].is_some() || parents[1..].iter().any(Option::is_none) {
+        return Err("the root must be the only node without a parent".into());
+    }
+    let below = surfels_below(tree);
+    let mut all = below[0].clone();
+    all.sort_unstable();
+    if all != (0..n as u32).collect::<Vec<_>>() {
+        return Err("the leaves' surfels are not a permutation of 0..n".into());
+    }
+    for k in 0..tree.len() as NodeId {
+        let v = tree.node(k);
+        let list = &below[k as usize];
+        match v.children {
+            Some(l) if l <= k || l as usize + 1 >= tree.len() || tree.is_leaf(k) || v.surfel.is_some() => {
+                return Err(format!("node {k}: bad children {l}"));
+            }
+            None if !tree.is_leaf(k) || v.surfel.is_none() => return Err(format!("node {k}: bad leaf")),
+            _ => {}
+        }
+        if tree.left_child(k) != v.children
+            || tree.sphere(k) != (v.center, v.radius)
+            || tree.area(k) != v.area
+            || tree.mean_normal(k) != v.normal
+            || tree.radiance(k) != v.radiance
+        {
+            return Err(format!("node {k}: accessors disagree with node()"));
+        }
+        let (c, big_r) = (v.center.as_dvec3(), v.radius as f64);
+        let (mut area, mut normal, mut radiance) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &i in list {
+            let s = &surfels[i as usize];
+            let (p, r) = (s.position.as_dvec3(), s.radius as f64);
+            // The sphere holds the whole ball around each disk (so the disk too).
+            let reach = (p - c).length() + r;
+            if reach > big_r {
+                return Err(format!(
+                    "node {k}: surfel {i} reaches {reach:e} from the centre, radius {big_r:e}"
+                ));
+            }
+            let a = std::f64::consts::PI * r * r;
+            area += a;
+            normal += s.normal.as_dvec3() * a;
+            radiance += s.radiance.as_dvec3() * a;
+            lo = lo.min(s.radiance.as_dvec3());
+            hi = hi.max(s.radiance.as_dvec3());
+        }
+        if (v.area as f64 - area).abs() > 1e-4 * area + 1e-37 {
+            return Err(format!(
+                "node {k}: area {:e}, surfels below sum to {area:e}",
+                v.area
+            ));
+        }
+        let (normal, radiance) = (normal / area, radiance / area);
+        if (v.normal.as_dvec3() - normal).abs().max_element() > 1e-5
+            || v.normal.length() > 1.0 + 1e-5
+            || (v.radiance.as_dvec3() - radiance).abs().max_element() > 1e-5 * (1.0 + hi.max_element())
+            || v.radiance.as_dvec3().cmplt(lo - 1e-5).any()
+            || v.radiance.as_dvec3().cmpgt(hi + 1e-5).any()
+        {
+            return Err(format!(
+                "node {k}: mean normal {} / radiance {} vs {normal} / {radiance}",
+                v.normal, v.radiance
+            ));
+        }
+        // The normal cone holds every normal below (rounded outwards).
+        let (cos, sin) = (v.cone_cos as f64, v.cone_sin as f64);
+        if !(0.0..=1.0).contains(&cos) || !(0.0..=1.0).contains(&sin) || cos * cos + sin * sin < 1.0 - 1e-6 {
+            return Err(format!("node {k}: cone cos {cos} sin {sin}"));
+        }
+        if cos > 0.0 {
+            let a = v.cone_axis.as_dvec3();
+            if (a.length() - 1.0).abs() > 1e-5 {
+                return Err(format!("node {k}: cone axis {a} is not unit"));
+            }
+            for &i in list {
+                let m = surfels[i as usize].normal.as_dvec3();
+                let c = a.dot(m) / (a.length() * m.length());
+                if c < cos {
+                    return Err(format!(
+                        "node {k}: normal of surfel {i} at cos {c} from the axis, cone cos {cos}"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn prop_tree(case: TreeCase) -> TestResult {
+    let surfels = common::cloud(&case.0);
+    let cloud = PointCloud::new(surfels.clone()).expect("generated surfels are valid");
+    let tree = Tree::build(&cloud);
+    if let Err(e) = check_tree(&surfels, &tree) {
+        return TestResult::error(e);
+    }
+    // Deterministic: a second build is identical, node for node.
+    let again = Tree::build(&cloud);
+    if again.len() != tree.len() || again.depth() != tree.depth() {
+        return TestResult::error("second build differs in shape");
+    }
+    if let Some(k) = (0..tree.len() as NodeId).find(|&k| tree.node(k) != again.node(k)) {
+        return TestResult::error(format!("second build differs at node {k}"));
+    }
+    TestResult::passed()
+}
+
+#[test]
+fn tree_properties_on_random_clouds() {
+    qc("tree properties", prop_tree as fn(TreeCase) -> TestResult);
+}
+
+#[test]
+fn hundred_thousand_surfels_at_one_position() {
+    let n = 100_000;
+    let s = Surfel {
+        position: Vec3::new(0.25, -3.0, 7.5),
+        normal: Vec3::Y,
+        radius: 0.01,
+        radiance: Vec3::ONE,
+    };
+    let surfels = vec![s; n];
+    let tree = Tree::build(&PointCloud::new(surfels.clone()).unwrap());
+    assert_eq!(tree.len(), 2 * n - 1);
+    assert!(tree.depth() <= 17, "depth {}", tree.depth());
+    let root = tree.node(0);
+    assert_eq!(root.center, s.position);
+    assert!(
+        root.radius >= s.radius && root.radius <= s.radius * (1.0 + 1e-5),
+        "{root:?}"
+    );
+    check_tree(&surfels, &tree).unwrap();
+    eprintln!("coincident build: depth {}", tree.depth());
+}
+
+#[test]
+fn parallel_builds_are_deterministic() {
+    // Above the crate's parallel cut-off, with ties everywhere and without.
+    let n = if reduced() { 5_000 } else { 20_000 };
+    let boxed = pbgi::synthetic::box_with_blocks(n, 9);
+    let lattice = PointCloud::new(common::cloud(&common::CloudSpec {
+        shape: common::Shape::Lattice,
+        n,
+        seed: 3,
+    }))
+    .unwrap();
+    for cloud in [boxed, lattice] {
+        let (a, b) = (Tree::build(&cloud), Tree::build(&cloud));
+        assert_eq!(a.len(), b.len());
+        assert!((0..a.len() as NodeId).all(|k| a.node(k) == b.node(k)));
+        check_tree(cloud.surfels(), &a).unwrap();
+    }
+    eprintln!("parallel builds: deterministic ({} threads)", rayon_threads());
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[test]
+fn small_sizes_have_minimal_depth() {
+    for n in 1..=70 {
+        let surfels = common::cloud(&common::CloudSpec {
+            shape: common::Shape::Uniform,
+            n,
+            seed: n as u64,
+        });
+        let tree = Tree::build(&PointCloud::new(surfels.clone()).unwrap());
+        check_tree(&surfels, &tree).unwrap_or_else(|e| panic!("n = {n}: {e}"));
+    }
+    eprintln!("small trees: n = 1..=70 (paths {})", path_names());
+}
