@@ -21,9 +21,6 @@ use crate::cut::CutSink;
 use crate::error::Error;
 use crate::tree::{NodeId, Tree};
 
-/// No node in this pixel.
-const EMPTY: NodeId = NodeId::MAX;
-
 /// The faces of the hemicube: top (+z), then +x, −x, +y, −y half faces.
 #[derive(Clone, Copy, Debug)]
 struct Face {
@@ -57,10 +54,31 @@ struct Table {
     pixel_angle: f32,
 }
 
-/// ∫∫ over the rectangle `[x0, x1] × [y0, y1]` of the plane at distance 1.
+/// Solid angle of the rectangle `[x0, x1] × [y0, y1]` on the plane at distance 1.
 fn rect_solid_angle(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     let f = |x: f64, y: f64| (x * y).atan2((x * x + y * y + 1.0).sqrt());
     f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)
+}
+
+/// `∫ cosθ dω` (θ from the axis) over the rectangle `[x0, x1] × [y0, y1]` of
+/// the plane at distance 1 along the axis: `∬ dx dy / (1 + x² + y²)²`, exactly.
+fn rect_cosine_top(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    let f = |x: f64, y: f64| {
+        let (a, b) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        0.5 * (x / a * (y / a).atan() + y / b * (x / b).atan())
+    };
+    f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)
+}
+
+/// `∫ cosθ dω` over the rectangle `[u0, u1] × [v0, v1]` of a side plane at
+/// distance 1 from the receiver, `v` the height above its tangent plane:
+/// `∬ v du dv / (1 + u² + v²)²`, exactly.
+fn rect_cosine_side(u0: f64, u1: f64, v0: f64, v1: f64) -> f64 {
+    let f = |u: f64, v: f64| {
+        let b = (1.0 + v * v).sqrt();
+        -0.5 / b * (u / b).atan()
+    };
+    f(u1, v1) - f(u0, v1) - f(u1, v0) + f(u0, v0)
 }
 
 impl Table {
@@ -101,22 +119,11 @@ impl Table {
                     let (uc, vc) = (u0 + 0.5 * du, v0 + 0.5 * dv);
                     let d = (f.axis.as_dvec3() + f.u.as_dvec3() * uc + f.v.as_dvec3() * vc).normalize();
                     let omega = rect_solid_angle(u0, u0 + du, v0, v0 + dv);
-                    // ∫ cosθ dω over the pixel (midpoint rule): the weights
-                    // then sum to π at every resolution.
-                    let m = (64 / n).max(2);
-                    let mut projected = 0.0;
-                    for i in 0..m {
-                        for j in 0..m {
-                            let (u, v) = (
-                                u0 + (i as f64 + 0.5) * du / m as f64,
-                                v0 + (j as f64 + 0.5) * dv / m as f64,
-                            );
-                            let q = f.axis.as_dvec3() + f.u.as_dvec3() * u + f.v.as_dvec3() * v;
-                            let len = q.length();
-                            projected += (q.z / len).max(0.0) / (len * len * len);
-                        }
-                    }
-                    projected *= du * dv / (m * m) as f64;
+                    let projected = if f.v0 < 0.0 {
+                        rect_cosine_top(u0, u0 + du, v0, v0 + dv)
+                    } else {
+                        rect_cosine_side(u0, u0 + du, v0, v0 + dv)
+                    };
                     dir.push(d.as_vec3());
                     solid_angle.push(omega as f32);
                     cos_weight.push(projected as f32);
@@ -168,15 +175,38 @@ impl Table {
             DVec2::new(d.dot(f.u) as f64 / along, d.dot(f.v) as f64 / along),
         ))
     }
+}
 
-    /// Pixel of face `k` at face coordinates `uv`, clamped into the face.
-    fn pixel(&self, k: usize, uv: DVec2) -> usize {
-        let f = &self.faces[k];
+/// Where a local direction falls on the hemicube.
+#[derive(Clone, Copy, Debug)]
+struct Spot {
+    /// Face index.
+    face: usize,
+    /// Continuous pixel coordinates on the face: column and row, pixel
+    /// `(c, r)` spanning `[c, c + 1) × [r, r + 1)`.
+    x: f64,
+    y: f64,
+    /// The pixel it lies in.
+    pixel: usize,
+}
+
+impl Table {
+    /// Where local direction `d` (upper hemisphere, else `None`) falls.
+    #[inline]
+    fn spot(&self, d: Vec3) -> Option<Spot> {
+        let (face, uv) = self.locate(d)?;
+        let f = &self.faces[face];
+        let x = (uv.x + 1.0) * 0.5 * f.cols as f64;
+        let y = (uv.y - f.v0 as f64) / (1.0 - f.v0 as f64) * f.rows as f64;
         // Truncation is floor for the non-negative values kept by `max`.
-        let c = (((uv.x + 1.0) * 0.5 * f.cols as f64).max(0.0) as usize).min(f.cols - 1);
-        let r =
-            (((uv.y - f.v0 as f64) / (1.0 - f.v0 as f64) * f.rows as f64).max(0.0) as usize).min(f.rows - 1);
-        f.first + r * f.cols + c
+        let c = (x.max(0.0) as usize).min(f.cols - 1);
+        let r = (y.max(0.0) as usize).min(f.rows - 1);
+        Some(Spot {
+            face,
+            x,
+            y,
+            pixel: f.first + r * f.cols + c,
+        })
     }
 }
 
@@ -197,39 +227,65 @@ pub struct MicroBuffer {
     position: Vec3,
     /// Tangent frame: local x, y, z (= normal) in world space.
     frame: [Vec3; 3],
-    raster: Raster,
+    pixels: Vec<Pixel>,
 }
 
-/// Leaf disks are rasterized this much larger than their radius.
+/// Leaf disks are rasterized this much larger than their radius, so that
+/// the disks of a surface overlap instead of leaving holes between them.
 const DISK_INFLATION: f32 = 1.2;
+
+/// Width of a cluster's coverage ramp, relative to its radius.
+const CONE_SOFTNESS: f32 = 1.0;
 
 /// One unit of coverage in the fixed-point sums.
 const COVER_ONE: f32 = (1u32 << 24) as f32;
 
-/// Per pixel: the nearest `(depth, node)` and the summed coverage.
-#[derive(Clone, Debug)]
-struct Raster {
-    depth: Vec<f32>,
-    node: Vec<NodeId>,
-    /// Coverage in units of 2⁻²⁴, summed over every splat.
-    cover: Vec<u64>,
+/// No splat: larger than every key.
+const NO_KEY: u64 = u64::MAX;
+
+/// `(depth, node)` as one integer ordered lexicographically: the bits of a
+/// non-negative, non-NaN `f32` order like its value.
+#[inline]
+fn key(depth: f32, node: NodeId) -> u64 {
+    debug_assert!(depth >= 0.0, "depth {depth}");
+    (u64::from(depth.to_bits()) << 32) | u64::from(node)
 }
 
-impl Raster {
-    /// Adds a splat of `coverage` ∈ (0, 1] at `depth` to pixel `p`.
+/// One pixel of the raster: two z-buffer entries and the summed coverage.
+#[derive(Clone, Copy, Debug)]
+struct Pixel {
+    /// The nearest `(depth, node)` among the splats that own the pixel.
+    own: u64,
+    /// The nearest among all splats that touch it.
+    any: u64,
+    /// Coverage in units of 2⁻²⁴, summed over every splat.
+    cover: u64,
+}
+
+const CLEAR: Pixel = Pixel {
+    own: NO_KEY,
+    any: NO_KEY,
+    cover: 0,
+};
+
+impl Pixel {
+    /// Adds a splat covering the fraction `coverage` ∈ (0, 1] of the pixel.
     #[inline]
-    fn write(&mut self, p: usize, depth: f32, node: NodeId, coverage: f32) {
-        self.cover[p] += (coverage * COVER_ONE) as u64;
-        if depth < self.depth[p] || (depth == self.depth[p] && node < self.node[p]) {
-            self.depth[p] = depth;
-            self.node[p] = node;
+    fn write(&mut self, key: u64, coverage: f32, owns: bool) {
+        debug_assert!(coverage >= 0.0, "coverage {coverage}");
+        self.cover += (coverage.min(1.0) * COVER_ONE) as u64;
+        self.any = self.any.min(key);
+        if owns {
+            self.own = self.own.min(key);
         }
     }
 
-    /// Coverage of pixel `p` in [0, 1].
+    /// The node the pixel shows (the nearest owner, else the nearest splat)
+    /// and its coverage in [0, 1]; `None` when nothing touched it.
     #[inline]
-    fn coverage(&self, p: usize) -> f32 {
-        (self.cover[p] as f32 / COVER_ONE).min(1.0)
+    fn shown(&self) -> Option<(NodeId, f32)> {
+        let k = if self.own != NO_KEY { self.own } else { self.any };
+        (k != NO_KEY).then(|| (k as NodeId, (self.cover as f32 / COVER_ONE).min(1.0)))
     }
 }
 
@@ -237,7 +293,8 @@ impl MicroBuffer {
     /// Largest supported resolution.
     pub const MAX_RESOLUTION: usize = 256;
 
-    /// A microbuffer of resolution `n` (top face n×n), 1 ≤ n ≤ 256.
+    /// A microbuffer of resolution `n` (top face n×n), 1 ≤ n ≤ 256. The
+    /// pixel tables of a resolution are built once per process and shared.
     pub fn new(n: usize) -> Result<Self, Error> {
         if !(1..=Self::MAX_RESOLUTION).contains(&n) {
             return Err(Error::InvalidParameter {
@@ -252,11 +309,7 @@ impl MicroBuffer {
             table,
             position: Vec3::ZERO,
             frame: [Vec3::X, Vec3::Y, Vec3::Z],
-            raster: Raster {
-                depth: vec![f32::INFINITY; len],
-                node: vec![EMPTY; len],
-                cover: vec![0; len],
-            },
+            pixels: vec![CLEAR; len],
         })
     }
 
@@ -265,9 +318,9 @@ impl MicroBuffer {
         self.table.n
     }
 
-    /// Number of pixels.
+    /// Number of pixels: `N² + 4·N·⌈N/2⌉`.
     pub fn pixels(&self) -> usize {
-        self.raster.depth.len()
+        self.pixels.len()
     }
 
     /// Clears the raster for a receiver at `position` facing `normal` (unit).
@@ -281,9 +334,7 @@ impl MicroBuffer {
         let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
         self.position = position;
         self.frame = [t, bt, n];
-        self.raster.depth.fill(f32::INFINITY);
-        self.raster.node.fill(EMPTY);
-        self.raster.cover.fill(0);
+        self.pixels.fill(CLEAR);
     }
 
     #[inline]
@@ -364,13 +415,23 @@ impl MicroBuffer {
     /// Rasterizes node `node` of `tree`, one node of this receiver's cut.
     ///
     /// With `Ω = A·max(0, −n̄·ω)/d²` the node's projected solid angle (area
-    /// `A`, mean normal `n̄`, direction `ω`, distance `d`): a node smaller
-    /// than the pixel its centre falls in covers that pixel by the fraction
-    /// `Ω/ΔΩ`; a larger leaf is rasterized as its disk over every pixel whose
-    /// centre ray hits it (depth: the hit distance); a larger cluster as a
-    /// cone of solid angle `Ω` around `ω`. Depth is the distance to the
-    /// centre. A node whose centre is the receiver's position has no
-    /// direction and is skipped.
+    /// `A`, mean normal `n̄`, direction `ω` and distance `d` of its centre):
+    ///
+    /// * a node smaller than the pixel `ω` falls in (`Ω < ΔΩ`) is spread over
+    ///   the 2×2 pixels around `ω` with bilinear weights, each covered by its
+    ///   weight times `Ω/ΔΩ`; it owns the pixel `ω` falls in;
+    /// * a larger leaf is drawn as its disk (radius inflated by 1.2) over the
+    ///   pixels whose centre ray hits its front; depth is the hit distance; a
+    ///   leaf covering no pixel centre (edge-on or between centres) is spread
+    ///   as above with `Ω` capped at the pixel's `ΔΩ`;
+    /// * a larger cluster is drawn as a soft cone around `ω`: coverage 1 in
+    ///   the middle, falling linearly across a rim as wide as the cone's
+    ///   radius (at least a pixel) and scaled so that it integrates to `Ω`.
+    ///   Radii are chords `|u − ω|`, for which a cap's solid angle is exactly
+    ///   `π·chord²`. It owns the pixels it covers by at least one half.
+    ///
+    /// Depth is the distance to the centre except on disks. A node whose
+    /// centre is the receiver's position has no direction and is skipped.
     pub fn splat(&mut self, tree: &Tree, node: NodeId) {
         let (center, _) = tree.sphere(node);
         let v = center - self.position;
@@ -379,72 +440,105 @@ impl MicroBuffer {
             return;
         }
         let d = d2.sqrt();
-        let w = self.to_local(v / d);
-        if w.z <= -1.0 {
-            return;
-        }
-        let area = tree.area(node);
+        let dir = v / d;
         let mean_normal = tree.mean_normal(node);
-        let omega = area * (-mean_normal.dot(v / d)).max(0.0) / d2;
+        let omega = tree.area(node) * (-mean_normal.dot(dir)).max(0.0) / d2;
         if !(omega > 0.0 && omega.is_finite()) {
             return;
         }
+        let w = self.to_local(dir);
+        let key = key(d, node);
+        let spot = self.table.spot(w);
+        let pixel_omega = spot.map(|s| self.table.solid_angle[s.pixel]);
+        if let (Some(s), Some(po)) = (spot, pixel_omega)
+            && omega < po
+        {
+            self.splat_small(&s, key, omega);
+        } else if tree.is_leaf(node) {
+            // `Ω` is a far-field estimate that blows up for a disk nearly in
+            // the receiver's plane: a leaf missing every centre gets a pixel at most.
+            if !self.splat_disk(node, center, mean_normal, tree.area(node), d, w)
+                && let (Some(s), Some(po)) = (spot, pixel_omega)
+            {
+                self.splat_small(&s, key, po);
+            }
+        } else {
+            let delta = spot.map_or(self.table.pixel_angle, |s| self.table.pixel_size[s.pixel]);
+            self.splat_cone(w, key, omega, delta);
+        }
+    }
+
+    /// Spreads a splat of solid angle `omega` at `spot` over the 2×2 pixels
+    /// around it (bilinear weights between pixel centres, clamped into the face).
+    #[inline]
+    fn splat_small(&mut self, spot: &Spot, key: u64, omega: f32) {
         let table = &*self.table;
-        // Smaller than the pixel it falls in: that pixel, by the fraction covered.
-        if let Some((k, uv)) = table.locate(w) {
-            let p = table.pixel(k, uv);
-            if omega < table.solid_angle[p] {
-                self.raster.write(p, d, node, omega / table.solid_angle[p]);
+        let f = &table.faces[spot.face];
+        let (gx, gy) = (spot.x - 0.5, spot.y - 0.5);
+        let (x0, y0) = (gx.floor(), gy.floor());
+        let (tx, ty) = ((gx - x0) as f32, (gy - y0) as f32);
+        let col = |x: f64| (x.max(0.0) as usize).min(f.cols - 1);
+        let row = |y: f64| (y.max(0.0) as usize).min(f.rows - 1);
+        let (c0, c1, r0, r1) = (col(x0), col(x0 + 1.0), row(y0), row(y0 + 1.0));
+        for (c, r, weight) in [
+            (c0, r0, (1.0 - tx) * (1.0 - ty)),
+            (c1, r0, tx * (1.0 - ty)),
+            (c0, r1, (1.0 - tx) * ty),
+            (c1, r1, tx * ty),
+        ] {
+            if weight > 0.0 {
+                let p = f.first + r * f.cols + c;
+                let cover = weight * (omega / table.solid_angle[p]);
+                self.pixels[p].write(key, cover, p == spot.pixel);
+            }
+        }
+    }
+
+    /// A soft cone of solid angle `omega` around local `w`; `delta` is the
+    /// angular size of a pixel there (the narrowest rim).
+    fn splat_cone(&mut self, w: Vec3, key: u64, omega: f32, delta: f32) {
+        // With chord radius `a` and rim width `s` (coverage 1/2 at `a`), the
+        // coverage integrates to `π(a² + s²/12)`; solve for `a`.
+        let cap = omega * std::f32::consts::FRAC_1_PI;
+        let k = CONE_SOFTNESS;
+        let soft2 = k * k / 12.0;
+        let mut a2 = cap / (1.0 + soft2);
+        let mut s = k * a2.sqrt();
+        if s < delta {
+            s = delta;
+            a2 = (cap - delta * delta / 12.0).max(0.0);
+        }
+        let a = a2.min(4.0).sqrt();
+        let (inner, outer) = ((a - 0.5 * s).max(0.0), a + 0.5 * s);
+        let (inner2, outer2, inv_s) = (inner * inner, outer * outer, 1.0 / s);
+        let reach = 2.0 * (0.5 * outer).min(1.0).asin();
+        let (table, pixels) = (&*self.table, &mut self.pixels);
+        Self::for_candidates(table, w, reach, |p| {
+            let c2 = (table.dir[p] - w).length_squared();
+            if c2 >= outer2 {
                 return;
             }
-        }
-        if tree.is_leaf(node) {
-            // A leaf covering no pixel centre is small, edge-on or seen from
-            // its back; `Ω` above is a far-field estimate that blows up for
-            // a disk nearly in the receiver's plane, so give it one pixel at most.
-            if !self.splat_disk(node, center, mean_normal, area, d, w)
-                && let Some((k, uv)) = self.table.locate(w)
-            {
-                let p = self.table.pixel(k, uv);
-                let cov = (omega / self.table.solid_angle[p]).min(1.0);
-                self.raster.write(p, d, node, cov);
-            }
-            return;
-        }
-        // A cone of solid angle Ω, anti-aliased: a pixel at angle θ from its
-        // axis is covered by `0.5 + (a − θ)/δ`, δ the pixel's angular size,
-        // so the coverage of the footprint sums to about Ω.
-        let a = (omega * std::f32::consts::FRAC_1_PI).sqrt().min(1.5);
-        let (table, raster) = (&*self.table, &mut self.raster);
-        let mut hit = false;
-        Self::for_candidates(table, w, a + table.pixel_angle, |p| {
-            // The chord |u − w| stands in for the angle (equal to second order).
-            let theta = (2.0 - 2.0 * table.dir[p].dot(w)).max(0.0).sqrt();
-            let cov = (0.5 + (a - theta) / table.pixel_size[p]).min(1.0);
-            if cov > 0.0 {
-                raster.write(p, d, node, cov);
-                hit = true;
+            let cover = if c2 <= inner2 {
+                1.0
+            } else {
+                (0.5 + (a - c2.sqrt()) * inv_s).min(1.0)
+            };
+            if cover > 0.0 {
+                pixels[p].write(key, cover, cover >= 0.5);
             }
         });
-        if !hit && let Some((k, uv)) = table.locate(w) {
-            let p = table.pixel(k, uv);
-            raster.write(p, d, node, (omega / table.solid_angle[p]).min(1.0));
-        }
     }
 
     /// Exact disk rasterization of a leaf; false if it covers no pixel centre.
     fn splat_disk(&mut self, node: NodeId, center: Vec3, normal: Vec3, area: f32, d: f32, w: Vec3) -> bool {
-        // Disks of a surface's own area leave holes between them; drawn a
-        // little larger they overlap, and the coverage clamp counts the
-        // overlap once.
         let r2 = area * std::f32::consts::FRAC_1_PI * (DISK_INFLATION * DISK_INFLATION);
         let r = r2.sqrt();
         let m = self.to_local(normal);
         let c = self.to_local(center - self.position);
-        let a = if r >= d { 2.0 } else { (r / d).asin() + 1e-3 };
+        let reach = if r >= d { 2.0 } else { (r / d).asin() + 1e-3 };
         let mut hit = false;
-        let (table, raster) = (&*self.table, &mut self.raster);
-        Self::for_candidates(table, w, a, |p| {
+        let (table, pixels) = (&*self.table, &mut self.pixels);
+        Self::for_candidates(table, w, reach, |p| {
             let u = table.dir[p];
             let denom = m.dot(u);
             if denom >= 0.0 {
@@ -452,52 +546,48 @@ impl MicroBuffer {
             }
             let t = m.dot(c) / denom;
             if t.is_nan() || t <= 0.0 {
-                return;
+                return; // behind the receiver (or NaN)
             }
             if (u * t - c).length_squared() <= r2 {
-                raster.write(p, t, node, 1.0);
+                pixels[p].write(key(t, node), 1.0, true);
                 hit = true;
             }
         });
         hit
     }
 
-    /// Irradiance: `Σ L·coverage·cosθ·ΔΩ` over the pixels, in pixel order.
+    /// Irradiance: `Σ L·coverage·∫cosθ dω` over the pixels, in pixel order.
     pub fn irradiance(&self, tree: &Tree) -> Vec3 {
         let mut e = Vec3::ZERO;
-        let r = &self.raster;
-        for p in 0..r.node.len() {
-            let k = r.node[p];
-            if k != EMPTY {
-                e += tree.radiance(k) * (r.coverage(p) * self.table.cos_weight[p]);
+        for (px, cw) in self.pixels.iter().zip(&self.table.cos_weight) {
+            if let Some((k, cover)) = px.shown() {
+                e += tree.radiance(k) * (cover * cw);
             }
         }
         e
     }
 
     /// Glossy reflection towards `wo` (world, unit):
-    /// `Σ L·coverage·f_s(ωi, ωo)·cosθ·ΔΩ`, in pixel order.
+    /// `Σ L·coverage·f_s(ωi, ωo)·∫cosθ dω`, `ωi` the pixel centre, in pixel order.
     pub fn glossy(&self, tree: &Tree, wo: Vec3, lobe: &GlossyLobe) -> Vec3 {
         let n = self.frame[2];
         let mut l = Vec3::ZERO;
-        let r = &self.raster;
-        for p in 0..r.node.len() {
-            let k = r.node[p];
-            if k != EMPTY {
+        for (p, px) in self.pixels.iter().enumerate() {
+            if let Some((k, cover)) = px.shown() {
                 let wi = self.to_world(self.table.dir[p]);
-                l += tree.radiance(k) * lobe.eval(n, wo, wi) * (r.coverage(p) * self.table.cos_weight[p]);
+                l += tree.radiance(k) * lobe.eval(n, wo, wi) * (cover * self.table.cos_weight[p]);
             }
         }
         l
     }
 
-    /// Ambient occlusion: the covered fraction of the cosine-weighted hemisphere.
+    /// Ambient occlusion: the covered fraction of the cosine-weighted
+    /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1].
     pub fn occlusion(&self) -> f32 {
         let mut s = 0.0;
-        let r = &self.raster;
-        for p in 0..r.node.len() {
-            if r.node[p] != EMPTY {
-                s += r.coverage(p) * self.table.cos_weight[p];
+        for (px, cw) in self.pixels.iter().zip(&self.table.cos_weight) {
+            if let Some((_, cover)) = px.shown() {
+                s += cover * cw;
             }
         }
         (s * std::f32::consts::FRAC_1_PI).min(1.0)
@@ -545,8 +635,8 @@ mod tests {
     fn every_direction_lands_in_its_pixel() {
         let t = Table::new(8);
         for (p, d) in t.dir.iter().enumerate() {
-            let (k, uv) = t.locate(*d).expect("upper hemisphere");
-            assert_eq!(t.pixel(k, uv), p, "pixel {p} dir {d}");
+            let s = t.spot(*d).expect("upper hemisphere");
+            assert_eq!(s.pixel, p, "pixel {p} dir {d}");
         }
     }
 }
