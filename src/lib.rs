@@ -54,6 +54,8 @@ pub mod reference;
 #[cfg(feature = "render")]
 pub mod render;
 #[cfg(feature = "render")]
+pub mod report;
+#[cfg(feature = "render")]
 pub mod scene;
 pub mod synthetic;
 #[cfg(feature = "render")]

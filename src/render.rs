@@ -44,8 +44,10 @@ pub struct RenderOptions {
     pub microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
     pub bounces: u32,
-    /// Camera samples per pixel (each a receiver), also the direct-light samples per receiver.
+    /// Camera samples per pixel (each a receiver).
     pub spp: u32,
+    /// Light samples per receiver for direct light (`None`: `spp`, at most 16).
+    pub direct_samples: Option<u32>,
     /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
     pub ao: bool,
     /// Surfels per unit area.
@@ -67,6 +69,7 @@ impl Default for RenderOptions {
             microbuffer: 8,
             bounces: 1,
             spp: 4,
+            direct_samples: None,
             ao: false,
             density: 2000.0,
             surfel_light_samples: 16,
@@ -159,6 +162,9 @@ pub enum RenderError {
     Scene(SceneError),
     /// A kernel-layer error (options, ISA, invalid surfels).
     Kernel(Error),
+    /// A self-check failed (a scheme's cuts differ from the reference's, or
+    /// an image does not match its reference's size).
+    Check(String),
 }
 
 impl std::fmt::Display for RenderError {
@@ -166,6 +172,7 @@ impl std::fmt::Display for RenderError {
         match self {
             RenderError::Scene(e) => e.fmt(f),
             RenderError::Kernel(e) => e.fmt(f),
+            RenderError::Check(m) => f.write_str(m),
         }
     }
 }
@@ -186,7 +193,19 @@ impl From<SceneError> for RenderError {
 
 /// Splat lists of one packet, filled by the traversal and splatted afterwards
 /// so traversal and splatting are timed apart.
-struct SplatLists(Vec<Vec<NodeId>>);
+pub(crate) struct SplatLists(pub Vec<Vec<NodeId>>);
+
+impl SplatLists {
+    pub fn new() -> Self {
+        SplatLists(vec![Vec::new(); LANES])
+    }
+
+    pub fn clear(&mut self) {
+        for l in &mut self.0 {
+            l.clear();
+        }
+    }
+}
 
 impl CutSink for SplatLists {
     #[inline]
@@ -269,6 +288,9 @@ type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
 
 struct Accum(AtomicU64);
 impl Accum {
+    fn new() -> Self {
+        Accum(AtomicU64::new(0))
+    }
     fn add(&self, seconds: f64) {
         self.0.fetch_add((seconds * 1e9) as u64, Ordering::Relaxed);
     }
@@ -277,245 +299,360 @@ impl Accum {
     }
 }
 
-/// Renders `scene`. `progress` is called with the number of tiles done each
-/// time one finishes (out of `tiles_total`, given first with 0 done).
+/// One receiver of a packet: the pixel of its tile (0..16), where the camera
+/// ray hit, and the random stream of its direct-light samples.
+pub(crate) struct PacketPoint {
+    pub pixel: usize,
+    pub point: ShadingPoint,
+    pub rng: Rng,
+}
+
+/// A scene made ready to render: ray queries, lights, surfels and their tree
+/// (the paper's `pre.` column), and the resolved scheme. [`render`] runs it
+/// whole; the benchmark and the error report run its stages one by one.
+pub struct Frame<'s> {
+    pub(crate) scene: &'s Scene,
+    pub(crate) opts: RenderOptions,
+    pub(crate) tracer: Tracer,
+    pub(crate) lights: Lights,
+    pub(crate) tree: Tree,
+    pub(crate) surfels: usize,
+    pub(crate) scheme: Scheme,
+    pub(crate) pre: f64,
+    pub(crate) stages: Vec<Stage>,
+    needs_points: bool,
+}
+
+impl<'s> Frame<'s> {
+    /// Validates the options, builds the ray queries, bakes the surfels
+    /// (with extra bounces if asked) and builds the tree.
+    pub fn prepare(scene: &'s Scene, opts: &RenderOptions) -> Result<Self, RenderError> {
+        scene.validate()?;
+        if opts.spp == 0 {
+            return Err(Error::InvalidParameter {
+                name: "spp",
+                value: "0".into(),
+                expected: "at least 1",
+            }
+            .into());
+        }
+        MicroBuffer::new(opts.microbuffer)?;
+        let mut stages = Vec::new();
+        let needs_points = opts.ao || opts.bounces > 0;
+        let scheme = match opts.scheme {
+            SchemeChoice::Fixed(s) => s,
+            SchemeChoice::Auto if scene.has_glossy() || scene.has_bump() => Scheme::Hybrid,
+            SchemeChoice::Auto => Scheme::Packet,
+        };
+
+        let t_pre = Instant::now();
+        let tracer = Tracer::new(scene);
+        let lights = Lights::new(scene);
+        let bake_opts = BakeOptions {
+            density: opts.density,
+            light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
+            seed: opts.seed,
+        };
+        let (tree, surfels) = if needs_points {
+            let baked = bake(scene, &tracer, &lights, &bake_opts);
+            stages.push(Stage {
+                name: "surfels + direct light at surfels",
+                skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
+            });
+            let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+            let mut cloud = baked.cloud;
+            let mut tree = Tree::build(&cloud);
+            for _ in 1..opts.bounces.max(1) {
+                cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, scheme, opts)?;
+                tree = Tree::build(&cloud);
+            }
+            stages.push(Stage {
+                name: "extra bounces gathered at surfels",
+                skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
+            });
+            let n = cloud.len();
+            (tree, n)
+        } else {
+            stages.push(Stage {
+                name: "surfels, tree and cuts",
+                skipped: Some("--bounces 0: direct light only".into()),
+            });
+            (Tree::build(&PointCloud::default()), 0)
+        };
+        let pre = t_pre.elapsed().as_secs_f64();
+        stages.push(Stage {
+            name: "glossy lobe convolution",
+            skipped: (!scene.has_glossy() || opts.ao).then(|| "no glossy material".to_string()),
+        });
+        stages.push(Stage {
+            name: "hybrid packet→single switching",
+            skipped: (scheme != Scheme::Hybrid).then(|| format!("scheme {scheme}")),
+        });
+        stages.push(Stage {
+            name: "direct light at receivers",
+            skipped: (opts.ao || lights.is_empty()).then(|| {
+                if opts.ao {
+                    "AO mode".to_string()
+                } else {
+                    "the scene has no light".to_string()
+                }
+            }),
+        });
+        Ok(Frame {
+            scene,
+            opts: *opts,
+            tracer,
+            lights,
+            tree,
+            surfels,
+            scheme,
+            pre,
+            stages,
+            needs_points,
+        })
+    }
+
+    /// The tree of the surfels (empty when the render needs none).
+    pub fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
+    /// Seconds spent in [`prepare`](Self::prepare) on surfels and tree.
+    pub fn pre_seconds(&self) -> f64 {
+        self.pre
+    }
+
+    /// The scheme `opts.scheme` resolved to.
+    pub fn scheme(&self) -> Scheme {
+        self.scheme
+    }
+
+    /// The traversal with this frame's options and `scheme`'s needs.
+    pub(crate) fn traversal(&self) -> Result<Traversal<'_>, Error> {
+        Traversal::new(
+            &self.tree,
+            CutOptions {
+                max_solid_angle: self.opts.max_solid_angle,
+                hybrid_threshold: self.opts.hybrid_threshold,
+                isa: self.opts.isa,
+            },
+        )
+    }
+
+    /// Number of 4×4-pixel tiles.
+    pub(crate) fn tiles(&self) -> usize {
+        let c = &self.scene.camera;
+        (c.width.div_ceil(4) * c.height.div_ceil(4)) as usize
+    }
+
+    /// The pixels `(x, y)` of `tile`, row by row (fewer at the image's edges).
+    pub(crate) fn tile_pixels(&self, tile: usize) -> Vec<(u32, u32)> {
+        let c = &self.scene.camera;
+        let tiles_x = c.width.div_ceil(4);
+        let (tx, ty) = ((tile as u32 % tiles_x) * 4, (tile as u32 / tiles_x) * 4);
+        (0..16)
+            .map(|i| (tx + i % 4, ty + i / 4))
+            .filter(|&(x, y)| x < c.width && y < c.height)
+            .collect()
+    }
+
+    /// One packet: camera sample `s` of each pixel of a tile (stratified over
+    /// the pixel), the rays that hit a visible surface.
+    pub(crate) fn packet(&self, pixels: &[(u32, u32)], s: u32) -> Vec<PacketPoint> {
+        let cam = &self.scene.camera;
+        let grid = (self.opts.spp as f32).sqrt().ceil() as u32;
+        let mut points = Vec::with_capacity(pixels.len());
+        for (k, &(x, y)) in pixels.iter().enumerate() {
+            let pix = y * cam.width + x;
+            let mut rng = Rng::new(
+                self.opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+            );
+            let (sx, sy) = (s % grid, s / grid % grid);
+            let fx = x as f32 + (sx as f32 + rng.f32()) / grid as f32;
+            let fy = y as f32 + (sy as f32 + rng.f32()) / grid as f32;
+            let dir = cam.ray_direction(fx, fy);
+            if let Some(hit) = self.tracer.closest(cam.origin, dir, f32::INFINITY)
+                && let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit)
+            {
+                points.push(PacketPoint { pixel: k, point, rng });
+            }
+        }
+        points
+    }
+
+    /// Emission plus direct light at each point (zero in AO mode).
+    pub(crate) fn direct(&self, points: &mut [PacketPoint]) -> Vec<Vec3> {
+        if self.opts.ao {
+            return vec![Vec3::ZERO; points.len()];
+        }
+        points
+            .iter_mut()
+            .map(|pp| {
+                let sp = &pp.point;
+                let m = &self.scene.materials[sp.material];
+                let lobe = m.glossy.map(|g| GlossyLobe {
+                    specular: g.specular,
+                    roughness: g.roughness,
+                });
+                let fd = m.albedo * std::f32::consts::FRAC_1_PI;
+                let (n, wo) = (sp.normal, sp.wo);
+                let f = |wi: Vec3| match &lobe {
+                    Some(l) => fd + l.eval(n, wo, wi),
+                    None => fd,
+                };
+                let samples = self.opts.direct_samples.unwrap_or(self.opts.spp.min(16));
+                sp.emitted
+                    + self
+                        .lights
+                        .reflected(&self.tracer, sp.position, n, samples, &mut pp.rng, f)
+            })
+            .collect()
+    }
+
+    /// The receivers of `points`.
+    pub(crate) fn receivers(points: &[PacketPoint]) -> Result<Vec<Receiver>, Error> {
+        points
+            .iter()
+            .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+            .collect()
+    }
+
+    /// Splats each point's cut (`lists`) into `mb` and convolves: the
+    /// indirect light (or `1 − AO`) at each point.
+    pub(crate) fn shade(
+        &self,
+        points: &[PacketPoint],
+        lists: &SplatLists,
+        mb: &mut MicroBuffer,
+    ) -> Vec<Vec3> {
+        let tree = &self.tree;
+        points
+            .iter()
+            .zip(&lists.0)
+            .map(|(pp, cut)| {
+                let sp = &pp.point;
+                mb.reset(sp.position, sp.normal);
+                for &node in cut {
+                    mb.splat(tree, node);
+                }
+                let m = &self.scene.materials[sp.material];
+                if self.opts.ao {
+                    Vec3::splat(1.0 - mb.occlusion())
+                } else {
+                    let mut l = m.albedo * std::f32::consts::FRAC_1_PI * mb.irradiance(tree);
+                    if let Some(g) = m.glossy {
+                        let lobe = GlossyLobe {
+                            specular: g.specular,
+                            roughness: g.roughness,
+                        };
+                        l += mb.glossy(tree, sp.wo, &lobe);
+                    }
+                    l
+                }
+            })
+            .collect()
+    }
+
+    /// Renders the image: per tile and camera sample, direct light, the cut
+    /// of each receiver, splatting and convolution. `progress` is called with
+    /// the number of tiles done each time one finishes (out of the total,
+    /// given first with 0 done).
+    pub fn render(&self, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<RenderOutput, RenderError> {
+        let wall = Instant::now();
+        let opts = &self.opts;
+        let traversal = self.traversal()?;
+        let mut mb_proto = MicroBuffer::new(opts.microbuffer)?;
+        mb_proto.reset(Vec3::ZERO, Vec3::Z);
+        let (w, h) = (self.scene.camera.width, self.scene.camera.height);
+        let tiles_total = self.tiles();
+        progress(0, tiles_total);
+        let done = AtomicU64::new(0);
+        let (acc_trav, acc_others, acc_direct) = (Accum::new(), Accum::new(), Accum::new());
+
+        let tiles: Vec<TileResult> = (0..tiles_total)
+            .into_par_iter()
+            .map(|tile| {
+                let mut stats = TraversalStats::default();
+                let mut lists = SplatLists::new();
+                let mut mb = mb_proto.clone();
+                let mut receivers_done = 0;
+                let pixels = self.tile_pixels(tile);
+                let mut sums = vec![Vec3::ZERO; pixels.len()];
+                for s in 0..opts.spp {
+                    let t0 = Instant::now();
+                    let mut points = self.packet(&pixels, s);
+                    let direct = self.direct(&mut points);
+                    acc_direct.add(t0.elapsed().as_secs_f64());
+                    receivers_done += points.len();
+                    let mut indirect = vec![Vec3::ZERO; points.len()];
+                    if self.needs_points && !points.is_empty() {
+                        let receivers = Self::receivers(&points)?;
+                        lists.clear();
+                        let t1 = Instant::now();
+                        stats.merge(&traversal.run(self.scheme, &receivers, &mut lists));
+                        let t2 = Instant::now();
+                        acc_trav.add((t2 - t1).as_secs_f64());
+                        indirect = self.shade(&points, &lists, &mut mb);
+                        acc_others.add(t2.elapsed().as_secs_f64());
+                    }
+                    for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {
+                        sums[pp.pixel] += *d + *l;
+                    }
+                }
+                let out = pixels
+                    .iter()
+                    .zip(&sums)
+                    .map(|(&(x, y), sum)| (y * w + x, *sum / opts.spp as f32))
+                    .collect();
+                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(d as usize, tiles_total);
+                Ok((out, stats, receivers_done))
+            })
+            .collect::<Result<_, Error>>()?;
+
+        let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
+        let mut stats = TraversalStats::default();
+        let mut receivers = 0;
+        for (out, st, n) in tiles {
+            for (i, c) in out {
+                // Never let a NaN out: a broken sample becomes black, and is counted in tests.
+                pixels[i as usize] = if c.is_finite() { c } else { Vec3::ZERO };
+            }
+            stats.merge(&st);
+            receivers += n;
+        }
+        Ok(RenderOutput {
+            image: Image {
+                width: w,
+                height: h,
+                pixels,
+            },
+            timings: Timings {
+                pre: self.pre,
+                trav: acc_trav.seconds(),
+                others: acc_others.seconds(),
+                direct: acc_direct.seconds(),
+                total_wall: self.pre + wall.elapsed().as_secs_f64(),
+            },
+            stats,
+            scheme: self.scheme,
+            isa: traversal.isa(),
+            surfels: self.surfels,
+            receivers,
+            stages: self.stages.clone(),
+        })
+    }
+}
+
+/// Renders `scene`: [`Frame::prepare`] then [`Frame::render`]. `progress` is
+/// called with the number of tiles done each time one finishes (out of the
+/// total, given first with 0 done).
 pub fn render(
     scene: &Scene,
     opts: &RenderOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderOutput, RenderError> {
-    scene.validate()?;
-    if opts.spp == 0 {
-        return Err(Error::InvalidParameter {
-            name: "spp",
-            value: "0".into(),
-            expected: "at least 1",
-        }
-        .into());
-    }
-    let wall = Instant::now();
-    let mut stages = Vec::new();
-    let needs_points = opts.ao || opts.bounces > 0;
-    let scheme = match opts.scheme {
-        SchemeChoice::Fixed(s) => s,
-        SchemeChoice::Auto if scene.has_glossy() || scene.has_bump() => Scheme::Hybrid,
-        SchemeChoice::Auto => Scheme::Packet,
-    };
-
-    // pre.: tracer, lights, surfels, tree.
-    let t_pre = Instant::now();
-    let tracer = Tracer::new(scene);
-    let lights = Lights::new(scene);
-    let bake_opts = BakeOptions {
-        density: opts.density,
-        light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
-        seed: opts.seed,
-    };
-    let (tree, surfels) = if needs_points {
-        let baked = bake(scene, &tracer, &lights, &bake_opts);
-        stages.push(Stage {
-            name: "surfels + direct light at surfels",
-            skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
-        });
-        let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
-        let mut cloud = baked.cloud;
-        let mut tree = Tree::build(&cloud);
-        for _ in 1..opts.bounces.max(1) {
-            cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, scheme, opts)?;
-            tree = Tree::build(&cloud);
-        }
-        stages.push(Stage {
-            name: "extra bounces gathered at surfels",
-            skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
-        });
-        let n = cloud.len();
-        (tree, n)
-    } else {
-        stages.push(Stage {
-            name: "surfels, tree and cuts",
-            skipped: Some("--bounces 0: direct light only".into()),
-        });
-        (Tree::build(&PointCloud::default()), 0)
-    };
-    let pre = t_pre.elapsed().as_secs_f64();
-
-    let traversal = Traversal::new(
-        &tree,
-        CutOptions {
-            max_solid_angle: opts.max_solid_angle,
-            hybrid_threshold: opts.hybrid_threshold,
-            isa: opts.isa,
-        },
-    )?;
-    let mut mb_proto = MicroBuffer::new(opts.microbuffer)?;
-    mb_proto.reset(Vec3::ZERO, Vec3::Z);
-    stages.push(Stage {
-        name: "glossy lobe convolution",
-        skipped: (!scene.has_glossy() || opts.ao).then(|| "no glossy material".to_string()),
-    });
-    stages.push(Stage {
-        name: "hybrid packet→single switching",
-        skipped: (scheme != Scheme::Hybrid).then(|| format!("scheme {scheme}")),
-    });
-    stages.push(Stage {
-        name: "direct light at receivers",
-        skipped: (opts.ao || lights.is_empty()).then(|| {
-            if opts.ao {
-                "AO mode".to_string()
-            } else {
-                "the scene has no light".to_string()
-            }
-        }),
-    });
-
-    let cam = &scene.camera;
-    let (w, h) = (cam.width, cam.height);
-    let tiles_x = w.div_ceil(4);
-    let tiles_y = h.div_ceil(4);
-    let tiles_total = (tiles_x * tiles_y) as usize;
-    progress(0, tiles_total);
-    let done = AtomicU64::new(0);
-    let (acc_trav, acc_others, acc_direct) = (
-        Accum(AtomicU64::new(0)),
-        Accum(AtomicU64::new(0)),
-        Accum(AtomicU64::new(0)),
-    );
-    let grid = (opts.spp as f32).sqrt().ceil() as u32;
-
-    let tiles: Vec<TileResult> = (0..tiles_total)
-        .into_par_iter()
-        .map(|tile| {
-            let (tx, ty) = ((tile as u32 % tiles_x) * 4, (tile as u32 / tiles_x) * 4);
-            let mut stats = TraversalStats::default();
-            let mut out: Vec<(u32, Vec3)> = Vec::with_capacity(16);
-            let mut lists = SplatLists(vec![Vec::new(); LANES]);
-            let mut mb = mb_proto.clone();
-            let mut receivers_done = 0;
-            let pixels: Vec<(u32, u32)> = (0..16)
-                .map(|i| (tx + i % 4, ty + i / 4))
-                .filter(|&(x, y)| x < w && y < h)
-                .collect();
-            let mut sums = vec![Vec3::ZERO; pixels.len()];
-            for s in 0..opts.spp {
-                let t0 = Instant::now();
-                // One packet: sample `s` of each pixel of the tile.
-                let mut points = Vec::with_capacity(16);
-                for (k, &(x, y)) in pixels.iter().enumerate() {
-                    let pix = y * w + x;
-                    let mut rng = Rng::new(
-                        opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
-                    );
-                    let (sx, sy) = (s % grid, s / grid % grid);
-                    let fx = x as f32 + (sx as f32 + rng.f32()) / grid as f32;
-                    let fy = y as f32 + (sy as f32 + rng.f32()) / grid as f32;
-                    let dir = cam.ray_direction(fx, fy);
-                    if let Some(hit) = tracer.closest(cam.origin, dir, f32::INFINITY)
-                        && let Some(sp) = shading_point(scene, &tracer, cam.origin, dir, &hit)
-                    {
-                        points.push((k, sp, rng));
-                    }
-                }
-                // Direct light (and emission) at each receiver.
-                let mut direct = vec![Vec3::ZERO; points.len()];
-                if !opts.ao {
-                    for (i, (_, sp, rng)) in points.iter_mut().enumerate() {
-                        let m = &scene.materials[sp.material];
-                        let lobe = m.glossy.map(|g| GlossyLobe {
-                            specular: g.specular,
-                            roughness: g.roughness,
-                        });
-                        let fd = m.albedo * std::f32::consts::FRAC_1_PI;
-                        let (n, wo) = (sp.normal, sp.wo);
-                        let f = |wi: Vec3| match &lobe {
-                            Some(l) => fd + l.eval(n, wo, wi),
-                            None => fd,
-                        };
-                        direct[i] =
-                            sp.emitted + lights.reflected(&tracer, sp.position, n, opts.spp.min(16), rng, f);
-                    }
-                }
-                acc_direct.add(t0.elapsed().as_secs_f64());
-
-                let mut indirect = vec![Vec3::ZERO; points.len()];
-                if needs_points && !points.is_empty() {
-                    let receivers: Vec<Receiver> = points
-                        .iter()
-                        .map(|(_, sp, _)| Receiver::new(sp.position, sp.normal))
-                        .collect::<Result<_, _>>()?;
-                    for l in lists.0.iter_mut() {
-                        l.clear();
-                    }
-                    let t1 = Instant::now();
-                    stats.merge(&traversal.run(scheme, &receivers, &mut lists));
-                    let t2 = Instant::now();
-                    acc_trav.add((t2 - t1).as_secs_f64());
-                    for (i, (_, sp, _)) in points.iter().enumerate() {
-                        mb.reset(sp.position, sp.normal);
-                        for &node in &lists.0[i] {
-                            mb.splat(&tree, node);
-                        }
-                        let m = &scene.materials[sp.material];
-                        indirect[i] = if opts.ao {
-                            Vec3::splat(1.0 - mb.occlusion())
-                        } else {
-                            let mut l = m.albedo * std::f32::consts::FRAC_1_PI * mb.irradiance(&tree);
-                            if let Some(g) = m.glossy {
-                                let lobe = GlossyLobe {
-                                    specular: g.specular,
-                                    roughness: g.roughness,
-                                };
-                                l += mb.glossy(&tree, sp.wo, &lobe);
-                            }
-                            l
-                        };
-                    }
-                    acc_others.add(t2.elapsed().as_secs_f64());
-                }
-                receivers_done += points.len();
-                for (i, (k, _, _)) in points.iter().enumerate() {
-                    sums[*k] += direct[i] + indirect[i];
-                }
-            }
-            for (k, &(x, y)) in pixels.iter().enumerate() {
-                out.push((y * w + x, sums[k] / opts.spp as f32));
-            }
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(d as usize, tiles_total);
-            Ok((out, stats, receivers_done))
-        })
-        .collect::<Result<_, Error>>()?;
-
-    let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
-    let mut stats = TraversalStats::default();
-    let mut receivers = 0;
-    for (out, st, n) in tiles {
-        for (i, c) in out {
-            // Never let a NaN out: a broken sample becomes black, and is counted in tests.
-            pixels[i as usize] = if c.is_finite() { c } else { Vec3::ZERO };
-        }
-        stats.merge(&st);
-        receivers += n;
-    }
-    Ok(RenderOutput {
-        image: Image {
-            width: w,
-            height: h,
-            pixels,
-        },
-        timings: Timings {
-            pre,
-            trav: acc_trav.seconds(),
-            others: acc_others.seconds(),
-            direct: acc_direct.seconds(),
-            total_wall: wall.elapsed().as_secs_f64(),
-        },
-        stats,
-        scheme,
-        isa: traversal.isa(),
-        surfels,
-        receivers,
-        stages,
-    })
+    Frame::prepare(scene, opts)?.render(progress)
 }
 
 /// One more bounce at the surfels: each surfel's radiance becomes its direct

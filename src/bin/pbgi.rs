@@ -9,6 +9,8 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::render::{Image, RenderOptions, RenderOutput, SchemeChoice, render};
+use pbgi::report::plot::write_plots;
+use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
 use pbgi::scene::load::resolve;
 use pbgi::{Isa, Scheme};
 
@@ -25,6 +27,121 @@ enum Command {
     Render(RenderArgs),
     /// Render the ground truth with the path tracer (same scene, camera, bounces).
     Reference(ReferenceArgs),
+    /// The paper's Table 1: pre., trav. per scheme, others, speed-ups over scalar.
+    Bench(BenchArgs),
+    /// Error against run time: sweeps Ω, microbuffer and schemes against a path-traced reference.
+    Report(ReportArgs),
+}
+
+#[derive(Args, Clone)]
+struct BenchArgs {
+    /// Scenes (built-in names or files); default: every scene available here.
+    scenes: Vec<String>,
+    /// One JSON object per (scene, scheme) on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Schemes to time (comma-separated); the scalar reference always runs.
+    #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
+    schemes: Vec<String>,
+    /// Rounds over the schemes; each time is the fastest of its rounds.
+    #[arg(long, default_value_t = 1)]
+    rounds: u32,
+    /// Worker threads (default 1: the paper's per-core figures).
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    /// Camera samples per pixel (each a receiver).
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    #[command(flatten)]
+    settings: Settings,
+}
+
+#[derive(Args, Clone)]
+struct ReportArgs {
+    /// Built-in scene or scene file.
+    #[arg(default_value = "cornell-box")]
+    scene: String,
+    /// The ground truth (.exr); default: OUT/reference.exr, path traced first if missing.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Paths per pixel of the reference when it is path traced here.
+    #[arg(long, default_value_t = 4096)]
+    reference_spp: u32,
+    /// Output folder for error.csv, error.md, error.png, error.svg.
+    #[arg(long, default_value = "report")]
+    out: PathBuf,
+    /// Ω values to sweep (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0.3,0.1,0.05,0.02,0.01,0.005,0.002,0.001"
+    )]
+    omegas: Vec<f32>,
+    /// Microbuffer resolutions swept besides the default (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "4,16")]
+    microbuffers: Vec<usize>,
+    /// Schemes to time (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
+    schemes: Vec<String>,
+    /// Path tracer's spp sweep (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
+    path_tracer_spp: Vec<u32>,
+    /// Leave out the Ω = 0 image (every leaf splatted; the slowest point).
+    #[arg(long)]
+    no_omega_zero: bool,
+    /// Camera samples per pixel of the point-based images.
+    #[arg(long, default_value_t = RenderOptions::default().spp)]
+    spp: u32,
+    /// Light samples per receiver for direct light.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    settings: Settings,
+}
+
+/// Point-based settings shared by `bench` and `report`.
+#[derive(Args, Clone)]
+struct Settings {
+    /// Ω: largest solid angle (sr) of a splatted cluster (the report's default point).
+    #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
+    max_solid_angle: f32,
+    /// Microbuffer resolution N (hemicube top face N×N).
+    #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
+    microbuffer: usize,
+    /// Indirect bounces: 0 direct only, 1 = direct + one bounce.
+    #[arg(long, default_value_t = RenderOptions::default().bounces)]
+    bounces: u32,
+    /// Surfels per unit area.
+    #[arg(long, default_value_t = RenderOptions::default().density)]
+    density: f32,
+    /// Hybrid: switch an entry to single below this many active lanes.
+    #[arg(long, default_value_t = RenderOptions::default().hybrid_threshold)]
+    hybrid_threshold: u32,
+    /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
+    #[arg(long)]
+    isa: Option<String>,
+}
+
+impl Settings {
+    fn options(&self, spp: u32) -> Res<RenderOptions> {
+        Ok(RenderOptions {
+            max_solid_angle: self.max_solid_angle,
+            microbuffer: self.microbuffer,
+            bounces: self.bounces,
+            spp,
+            density: self.density,
+            hybrid_threshold: self.hybrid_threshold,
+            isa: parse_isa(&self.isa)?,
+            ..RenderOptions::default()
+        })
+    }
+}
+
+fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
+    names.iter().map(|n| Ok(n.trim().parse::<Scheme>()?)).collect()
 }
 
 #[derive(Args, Clone)]
@@ -100,6 +217,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
         Some(Command::Reference(args)) => cmd_reference(&args),
+        Some(Command::Bench(args)) => cmd_bench(&args),
+        Some(Command::Report(args)) => cmd_report(&args),
         None => cmd_render(&RenderArgs::default()),
     };
     match result {
@@ -320,4 +439,203 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
             Some(why) => println!("  skipped  {} ({why})", s.name),
         }
     }
+}
+
+fn cmd_bench(a: &BenchArgs) -> Res<()> {
+    let scenes = if a.scenes.is_empty() {
+        pbgi::scene::builtin::NAMES
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    } else {
+        a.scenes.clone()
+    };
+    let opts = BenchOptions {
+        render: a.settings.options(a.spp)?,
+        schemes: parse_schemes(&a.schemes)?,
+        rounds: a.rounds,
+    };
+    let pool = thread_pool(Some(a.threads))?;
+    let mut all = Vec::new();
+    for name in &scenes {
+        let scene = load_scene(name)?;
+        let bar = progress_bar("passes", format!("bench {}", scene.name));
+        let rows = pool.install(|| bench(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
+        bar.finish_and_clear();
+        if a.json {
+            for r in &rows {
+                println!("{}", r.to_json());
+            }
+        } else {
+            print_table1(&rows, &opts.render);
+        }
+        all.extend(rows);
+    }
+    if !a.json && all.len() > 1 {
+        println!(
+            "(times in seconds, {} thread(s); speed-ups are ratios from this one run)",
+            a.threads
+        );
+    }
+    Ok(())
+}
+
+fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
+    let Some(first) = rows.first() else { return };
+    println!(
+        "{}: {} surfels ({:.0} B/surfel in the tree), {} receivers, {} on {}, {} thread(s), Ω {}, microbuffer {}",
+        first.scene,
+        first.surfels,
+        first.bytes_per_surfel,
+        first.receivers,
+        if o.spp == 1 {
+            "1 spp".to_string()
+        } else {
+            format!("{} spp", o.spp)
+        },
+        first.isa,
+        first.threads,
+        o.max_solid_angle,
+        o.microbuffer
+    );
+    println!(
+        "  {:<7} {:>8} {:>10} {:>9} {:>8} {:>7} {:>10} {:>11} {:>9}",
+        "scheme", "pre.", "trav.", "speed-up", "others", "lanes", "nodes/rec", "splats/rec", "frame"
+    );
+    for r in rows {
+        println!(
+            "  {:<7} {:>8.3} {:>10.3} {:>8.2}× {:>8.3} {:>7} {:>10.0} {:>11.0} {:>9.3}",
+            r.scheme.name(),
+            r.pre_s,
+            r.trav_s,
+            r.speedup_vs_scalar,
+            r.others_s,
+            r.lane_utilization
+                .map_or("–".to_string(), |u| format!("{:.1}%", 100.0 * u)),
+            r.nodes_per_receiver,
+            r.splats_per_receiver,
+            r.frame_s()
+        );
+    }
+}
+
+fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![glam::Vec3::ZERO; res.width() * res.height()]),
+        |(w, px): &mut (usize, Vec<glam::Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = glam::Vec3::new(r, g, b);
+        },
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let size = img.layer_data.size;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    Ok(pbgi::render::Image {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        pixels,
+    })
+}
+
+fn cmd_report(a: &ReportArgs) -> Res<()> {
+    let scene = load_scene(&a.scene)?;
+    let pool = thread_pool(a.threads)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let (ref_path, given) = match &a.reference {
+        Some(p) => (p.clone(), true),
+        None => (a.out.join("reference.exr"), false),
+    };
+    let mut reference_spp = None;
+    let reference = if ref_path.exists() {
+        println!("reference: {}", ref_path.display());
+        read_exr(&ref_path)?
+    } else if given {
+        return Err(format!("{}: no such reference image", ref_path.display()).into());
+    } else {
+        let bar = progress_bar(
+            "rows",
+            format!("path tracing the reference, {} spp", a.reference_spp),
+        );
+        let opts = pbgi::reference::ReferenceOptions {
+            spp: a.reference_spp,
+            bounces: a.settings.bounces as i32,
+            ..Default::default()
+        };
+        let out = pool.install(|| {
+            pbgi::reference::render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
+        })?;
+        bar.finish_and_clear();
+        write_image(&out.image, &ref_path)?;
+        println!(
+            "reference: path traced at {} spp in {:.1} s, wrote {}",
+            a.reference_spp,
+            out.seconds,
+            ref_path.display()
+        );
+        reference_spp = Some(a.reference_spp);
+        out.image
+    };
+    let (cw, ch) = (scene.camera.width, scene.camera.height);
+    if (reference.width, reference.height) != (cw, ch) {
+        return Err(format!(
+            "{}: the reference is {}×{}, the scene's camera {cw}×{ch}",
+            ref_path.display(),
+            reference.width,
+            reference.height
+        )
+        .into());
+    }
+    let mut render_opts = a.settings.options(a.spp)?;
+    render_opts.direct_samples = Some(a.direct_samples);
+    let sweep = SweepOptions {
+        render: render_opts,
+        omegas: a.omegas.clone(),
+        microbuffers: a.microbuffers.clone(),
+        schemes: parse_schemes(&a.schemes)?,
+        omega_zero: !a.no_omega_zero,
+        path_tracer_spp: a.path_tracer_spp.clone(),
+        bounces: a.settings.bounces,
+    };
+    let bar = progress_bar("images", format!("error sweep of {}", scene.name));
+    bar.set_length(sweep.len() as u64);
+    let points = pool.install(|| {
+        error_sweep(&scene, &reference, &sweep, &|done, _, what| {
+            bar.set_position(done as u64);
+            bar.set_message(what.to_string());
+        })
+    })?;
+    bar.finish_and_clear();
+    let files = [
+        ("error.csv", to_csv(&scene.name, &points)),
+        (
+            "error.md",
+            to_markdown(&scene.name, &points, &render_opts, reference_spp),
+        ),
+    ];
+    for (name, text) in &files {
+        let p = a.out.join(name);
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    let (png, svg) = (a.out.join("error.png"), a.out.join("error.svg"));
+    write_plots(
+        &points,
+        render_opts.microbuffer,
+        &format!(
+            "{}: relative RMSE against time ({} thread(s))",
+            scene.name,
+            pool.current_num_threads()
+        ),
+        &png,
+        &svg,
+    )?;
+    print!("{}", files[1].1);
+    println!(
+        "wrote {}, {}, {}, {}",
+        a.out.join("error.csv").display(),
+        a.out.join("error.md").display(),
+        png.display(),
+        svg.display()
+    );
+    Ok(())
 }

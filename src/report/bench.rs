@@ -1,0 +1,296 @@
+//! The paper's Table 1 for one scene: `pre.` (surfels + tree), `trav.` for
+//! each scheme, `others` (splatting + convolution), with speed-ups over the
+//! scalar reference, lane utilization and nodes tested per receiver.
+//!
+//! Every scheme traverses the same receivers (the camera's primary hits, in
+//! 4×4-pixel packets, as [`render`](crate::render::render) forms them), and
+//! the cuts are checked against the scalar reference's with an
+//! order-independent checksum: a scheme that cut differently fails the
+//! benchmark instead of reporting a speed-up.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::cut::{CutSink, Isa, Scheme, TraversalStats};
+use crate::microbuffer::MicroBuffer;
+use crate::render::{Frame, PacketPoint, RenderError, RenderOptions, SplatLists};
+use crate::scene::Scene;
+use crate::tree::NodeId;
+
+/// Benchmark settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchOptions {
+    /// The render settings (Ω, microbuffer, density, camera samples, ISA…);
+    /// its `scheme` is ignored: every scheme of `schemes` runs.
+    pub render: RenderOptions,
+    /// The schemes to time; the scalar reference is always timed (first).
+    pub schemes: Vec<Scheme>,
+    /// Rounds over the schemes; each figure is the fastest of its rounds.
+    pub rounds: u32,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            render: RenderOptions {
+                spp: 1,
+                ..RenderOptions::default()
+            },
+            schemes: Scheme::ALL.to_vec(),
+            rounds: 1,
+        }
+    }
+}
+
+/// One (scene, scheme) row of Table 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchRow {
+    /// Scene name.
+    pub scene: String,
+    /// Traversal scheme.
+    pub scheme: Scheme,
+    /// Instruction-set path it ran on.
+    pub isa: Isa,
+    /// Worker threads.
+    pub threads: usize,
+    /// Surfels in the cloud.
+    pub surfels: usize,
+    /// Tree bytes per surfel.
+    pub bytes_per_surfel: f64,
+    /// Receivers (camera hits) cut.
+    pub receivers: usize,
+    /// Seconds for surfels (with their direct light) and tree.
+    pub pre_s: f64,
+    /// Seconds for the cuts of every receiver with this scheme.
+    pub trav_s: f64,
+    /// Seconds for splatting the cuts into the microbuffers and convolving
+    /// (the same cuts for every scheme, so measured once per scene).
+    pub others_s: f64,
+    /// The scalar traversal's time over this one's, from the same run.
+    pub speedup_vs_scalar: f64,
+    /// Active lanes over lane slots (vector schemes).
+    pub lane_utilization: Option<f64>,
+    /// Node tests per receiver.
+    pub nodes_per_receiver: f64,
+    /// Splats per receiver.
+    pub splats_per_receiver: f64,
+}
+
+impl BenchRow {
+    /// `pre. + trav. + others`: the frame's point-based work.
+    pub fn frame_s(&self) -> f64 {
+        self.pre_s + self.trav_s + self.others_s
+    }
+
+    /// One JSON object (no dependency on a JSON crate: every field is a
+    /// number or a plain string).
+    pub fn to_json(&self) -> String {
+        let opt = |x: Option<f64>| x.map_or("null".to_string(), |v| format!("{v:.6}"));
+        format!(
+            concat!(
+                "{{\"scene\":\"{}\",\"scheme\":\"{}\",\"isa\":\"{}\",\"threads\":{},",
+                "\"surfels\":{},\"bytes_per_surfel\":{:.1},\"receivers\":{},",
+                "\"pre_s\":{:.6},\"trav_s\":{:.6},\"others_s\":{:.6},\"frame_s\":{:.6},",
+                "\"speedup_vs_scalar\":{:.4},\"lane_utilization\":{},",
+                "\"nodes_per_receiver\":{:.1},\"splats_per_receiver\":{:.1}}}"
+            ),
+            json_escape(&self.scene),
+            self.scheme,
+            self.isa,
+            self.threads,
+            self.surfels,
+            self.bytes_per_surfel,
+            self.receivers,
+            self.pre_s,
+            self.trav_s,
+            self.others_s,
+            self.frame_s(),
+            self.speedup_vs_scalar,
+            opt(self.lane_utilization),
+            self.nodes_per_receiver,
+            self.splats_per_receiver,
+        )
+    }
+}
+
+pub(crate) fn json_escape(s: &str) -> String {
+    s.chars()
+        .flat_map(|c| match c {
+            '"' => vec!['\\', '"'],
+            '\\' => vec!['\\', '\\'],
+            c if (c as u32) < 0x20 => format!("\\u{:04x}", c as u32).chars().collect(),
+            c => vec![c],
+        })
+        .collect()
+}
+
+/// SplitMix64's finalizer: spreads a node index over 64 bits.
+#[inline]
+fn mix(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Counts splats and sums a checksum of each receiver's cut that does not
+/// depend on the order the scheme reports it in.
+struct CutDigest {
+    /// Per receiver of the packet: `Σ mix(node)`.
+    sums: [u64; 16],
+    splats: u64,
+}
+
+impl CutSink for CutDigest {
+    #[inline(always)]
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        self.sums[receiver] = self.sums[receiver].wrapping_add(mix(node as u64));
+        self.splats += 1;
+    }
+}
+
+/// One packet of receivers, ready to cut and shade.
+struct Packet {
+    points: Vec<PacketPoint>,
+    receivers: Vec<crate::cut::Receiver>,
+    /// Index of the packet's first receiver in the frame.
+    first: usize,
+}
+
+/// Times every scheme of `opts` on `scene`; one row per scheme, the scalar
+/// reference first. `progress(done, total)` counts timed passes.
+pub fn bench(
+    scene: &Scene,
+    opts: &BenchOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<BenchRow>, RenderError> {
+    let mut schemes = vec![Scheme::Scalar];
+    schemes.extend(opts.schemes.iter().copied().filter(|&s| s != Scheme::Scalar));
+    let rounds = opts.rounds.max(1) as usize;
+    let passes = rounds * schemes.len() + 1;
+    progress(0, passes);
+    let mut done = 0;
+
+    let frame = Frame::prepare(scene, &opts.render)?;
+    let traversal = frame.traversal()?;
+    let threads = rayon::current_num_threads();
+
+    // The receivers: every camera sample of every tile, one packet each.
+    let mut packets: Vec<Packet> = (0..frame.tiles())
+        .into_par_iter()
+        .flat_map_iter(|tile| {
+            let pixels = frame.tile_pixels(tile);
+            (0..frame.opts.spp)
+                .map(|s| frame.packet(&pixels, s))
+                .filter(|p| !p.is_empty())
+                .collect::<Vec<_>>()
+        })
+        .map(|points| {
+            let receivers = Frame::receivers(&points)?;
+            Ok(Packet {
+                points,
+                receivers,
+                first: 0,
+            })
+        })
+        .collect::<Result<_, crate::Error>>()?;
+    let mut first = 0;
+    for p in &mut packets {
+        p.first = first;
+        first += p.receivers.len();
+    }
+    let receivers = first;
+
+    // trav.: wall clock of the cuts of every packet, per scheme.
+    let mut best = vec![f64::INFINITY; schemes.len()];
+    let mut results: Vec<Option<(TraversalStats, u64, u64)>> = vec![None; schemes.len()];
+    for _ in 0..rounds {
+        for (i, &scheme) in schemes.iter().enumerate() {
+            let t0 = Instant::now();
+            let (stats, digest, splats) = packets
+                .par_iter()
+                .map(|p| {
+                    let mut sink = CutDigest {
+                        sums: [0; 16],
+                        splats: 0,
+                    };
+                    let stats = traversal.run(scheme, &p.receivers, &mut sink);
+                    let digest = sink.sums[..p.receivers.len()]
+                        .iter()
+                        .enumerate()
+                        .fold(0u64, |acc, (l, &s)| {
+                            acc.wrapping_add(mix(s ^ mix((p.first + l) as u64)))
+                        });
+                    (stats, digest, sink.splats)
+                })
+                .reduce(
+                    || (TraversalStats::default(), 0, 0),
+                    |(mut a, da, sa), (b, db, sb)| {
+                        a.merge(&b);
+                        (a, da.wrapping_add(db), sa + sb)
+                    },
+                );
+            best[i] = best[i].min(t0.elapsed().as_secs_f64());
+            results[i] = Some((stats, digest, splats));
+            done += 1;
+            progress(done, passes);
+        }
+    }
+    let scalar_digest = results[0].as_ref().map(|r| r.1);
+    for (i, r) in results.iter().enumerate() {
+        if r.as_ref().map(|r| r.1) != scalar_digest {
+            return Err(RenderError::Check(format!(
+                "{}: the {} cuts differ from the scalar reference's",
+                scene.name, schemes[i]
+            )));
+        }
+    }
+
+    // others: splatting and convolution of the (identical) cuts, timed apart
+    // from the traversal that makes them; thread-seconds over threads.
+    let mut proto = MicroBuffer::new(frame.opts.microbuffer)?;
+    proto.reset(glam::Vec3::ZERO, glam::Vec3::Z);
+    let shade_ns: u64 = packets
+        .par_iter()
+        .map_init(
+            || (SplatLists::new(), proto.clone()),
+            |(lists, mb), p| {
+                lists.clear();
+                traversal.run(Scheme::Packet, &p.receivers, lists);
+                let t0 = Instant::now();
+                let l = frame.shade(&p.points, lists, mb);
+                std::hint::black_box(l);
+                t0.elapsed().as_nanos() as u64
+            },
+        )
+        .sum();
+    let others = shade_ns as f64 * 1e-9 / threads as f64;
+    progress(passes, passes);
+
+    let tree = frame.tree();
+    let scalar_trav = best[0];
+    Ok(schemes
+        .iter()
+        .enumerate()
+        .map(|(i, &scheme)| {
+            let (stats, _, splats) = results[i].expect("every scheme ran");
+            BenchRow {
+                scene: scene.name.clone(),
+                scheme,
+                isa: traversal.isa(),
+                threads,
+                surfels: frame.surfels,
+                bytes_per_surfel: tree.bytes_per_surfel(),
+                receivers,
+                pre_s: frame.pre_seconds(),
+                trav_s: best[i],
+                others_s: others,
+                speedup_vs_scalar: scalar_trav / best[i],
+                lane_utilization: stats.lane_utilization(),
+                nodes_per_receiver: stats.nodes_per_receiver(),
+                splats_per_receiver: splats as f64 / receivers.max(1) as f64,
+            }
+        })
+        .collect())
+}

@@ -1,0 +1,397 @@
+//! What the speed costs in accuracy: Table-1 timings per scheme ([`bench`])
+//! and the error of the point-based image against the path-traced ground
+//! truth as the solid-angle threshold Ω and the microbuffer resolution vary
+//! ([`error_sweep`]), next to the path tracer's own error at rising sample
+//! counts.
+//!
+//! The error is the relative RMSE over the pixels that see no emitter
+//! directly, not even in part ([`emitter_mask`]): `sqrt(Σ‖I − R‖² / Σ‖R‖²)` over those pixels
+//! and the three channels, `R` the reference. Emitters seen directly are left
+//! out because both renderers show them exactly and their radiance would
+//! dominate the sums.
+
+pub mod bench;
+#[cfg(feature = "plots")]
+pub mod plot;
+
+use std::fmt::Write as _;
+
+use crate::cut::Scheme;
+use crate::reference::{ReferenceOptions, render_reference};
+use crate::render::{Image, RenderError, RenderOptions, SchemeChoice, render, shading_point};
+use crate::scene::Scene;
+use crate::trace::Tracer;
+
+pub use bench::{BenchOptions, BenchRow, bench};
+
+/// Pixels that see an emitter's front, even in part (true: left out of the
+/// error): those whose centre ray hits an emitter and their 8 neighbours, so
+/// the light's edge pixels, whose value is mostly antialiasing noise, are
+/// left out with it.
+pub fn emitter_mask(scene: &Scene) -> Vec<bool> {
+    let tracer = Tracer::new(scene);
+    let cam = &scene.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let mut hits = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let dir = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+            hits.push(
+                tracer
+                    .closest(cam.origin, dir, f32::INFINITY)
+                    .and_then(|hit| shading_point(scene, &tracer, cam.origin, dir, &hit))
+                    .is_some_and(|sp| sp.emitted.max_element() > 0.0),
+            );
+        }
+    }
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            (y.saturating_sub(1)..(y + 2).min(h))
+                .any(|yy| (x.saturating_sub(1)..(x + 2).min(w)).any(|xx| hits[yy * w + xx]))
+        })
+        .collect()
+}
+
+/// Relative RMSE of `image` against `reference` over the pixels not in
+/// `mask`: `sqrt(Σ‖I − R‖² / Σ‖R‖²)`, in f64.
+pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<f64, RenderError> {
+    if (image.width, image.height) != (reference.width, reference.height) || mask.len() != image.pixels.len()
+    {
+        return Err(RenderError::Check(format!(
+            "image {}×{} against reference {}×{} ({} mask pixels)",
+            image.width,
+            image.height,
+            reference.width,
+            reference.height,
+            mask.len()
+        )));
+    }
+    let (mut err, mut norm) = (0.0f64, 0.0f64);
+    for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
+        if skip {
+            continue;
+        }
+        let (a, b) = (a.as_dvec3(), b.as_dvec3());
+        err += (a - b).length_squared();
+        norm += b.length_squared();
+    }
+    if norm > 0.0 {
+        Ok((err / norm).sqrt())
+    } else {
+        Err(RenderError::Check(
+            "the reference is black outside the emitters".into(),
+        ))
+    }
+}
+
+/// How an image of the sweep was made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// The point-based renderer.
+    PointBased {
+        /// Traversal scheme.
+        scheme: Scheme,
+        /// Solid-angle threshold Ω (0: every leaf splatted).
+        omega: f32,
+        /// Microbuffer resolution.
+        microbuffer: usize,
+    },
+    /// The path tracer.
+    PathTracer {
+        /// Paths per pixel.
+        spp: u32,
+    },
+}
+
+/// One point of error against run time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorPoint {
+    /// How the image was made.
+    pub method: Method,
+    /// Seconds for surfels and tree (0 for the path tracer).
+    pub pre_s: f64,
+    /// Traversal thread-seconds.
+    pub trav_s: f64,
+    /// Splatting + convolution thread-seconds.
+    pub others_s: f64,
+    /// Wall-clock seconds of the whole image.
+    pub total_s: f64,
+    /// Relative RMSE against the reference.
+    pub rel_rmse: f64,
+}
+
+/// What the sweep varies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepOptions {
+    /// Settings of every point-based image but those varied.
+    pub render: RenderOptions,
+    /// Ω values, swept for every scheme at the default microbuffer resolution.
+    pub omegas: Vec<f32>,
+    /// Microbuffer resolutions, swept with `omegas` for the first scheme.
+    pub microbuffers: Vec<usize>,
+    /// Schemes (images are identical across schemes; their times differ).
+    pub schemes: Vec<Scheme>,
+    /// Also render the Ω = 0 image (every leaf splatted; slow): it splits
+    /// the hierarchy's error from the point discretization's.
+    pub omega_zero: bool,
+    /// Paths per pixel of the path tracer's points.
+    pub path_tracer_spp: Vec<u32>,
+    /// Indirect bounces for both renderers.
+    pub bounces: u32,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        Self {
+            render: RenderOptions {
+                direct_samples: Some(16),
+                ..RenderOptions::default()
+            },
+            omegas: vec![0.3, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001],
+            microbuffers: vec![4, 16],
+            schemes: Scheme::ALL.to_vec(),
+            omega_zero: true,
+            path_tracer_spp: vec![1, 4, 16, 64, 256],
+            bounces: 1,
+        }
+    }
+}
+
+impl SweepOptions {
+    /// The point-based settings the sweep visits, in order.
+    pub fn point_based(&self) -> Vec<Method> {
+        let default_n = self.render.microbuffer;
+        let mut v = Vec::new();
+        for &scheme in &self.schemes {
+            for &omega in &self.omegas {
+                v.push(Method::PointBased {
+                    scheme,
+                    omega,
+                    microbuffer: default_n,
+                });
+            }
+        }
+        if let Some(&scheme) = self.schemes.first() {
+            for &n in self.microbuffers.iter().filter(|&&n| n != default_n) {
+                for &omega in &self.omegas {
+                    v.push(Method::PointBased {
+                        scheme,
+                        omega,
+                        microbuffer: n,
+                    });
+                }
+            }
+            if self.omega_zero {
+                v.push(Method::PointBased {
+                    scheme,
+                    omega: 0.0,
+                    microbuffer: default_n,
+                });
+            }
+        }
+        v
+    }
+
+    /// Number of images the sweep renders.
+    pub fn len(&self) -> usize {
+        self.point_based().len() + self.path_tracer_spp.len()
+    }
+
+    /// Whether the sweep renders nothing.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Renders every point of `opts` and measures it against `reference`.
+/// `progress(done, total, what)` is called before each image and at the end.
+pub fn error_sweep(
+    scene: &Scene,
+    reference: &Image,
+    opts: &SweepOptions,
+    progress: &(dyn Fn(usize, usize, &str) + Sync),
+) -> Result<Vec<ErrorPoint>, RenderError> {
+    let mask = emitter_mask(scene);
+    let total = opts.len();
+    let mut points = Vec::with_capacity(total);
+    for (i, method) in opts.point_based().into_iter().enumerate() {
+        let Method::PointBased {
+            scheme,
+            omega,
+            microbuffer,
+        } = method
+        else {
+            unreachable!("point_based yields point-based methods")
+        };
+        progress(
+            i,
+            total,
+            &format!("{scheme}, Ω {omega}, microbuffer {microbuffer}"),
+        );
+        let ro = RenderOptions {
+            scheme: SchemeChoice::Fixed(scheme),
+            max_solid_angle: omega,
+            microbuffer,
+            bounces: opts.bounces,
+            ..opts.render
+        };
+        let out = render(scene, &ro, &|_, _| {})?;
+        let t = &out.timings;
+        points.push(ErrorPoint {
+            method,
+            pre_s: t.pre,
+            trav_s: t.trav,
+            others_s: t.others,
+            total_s: t.total_wall,
+            rel_rmse: relative_rmse(&out.image, reference, &mask)?,
+        });
+    }
+    let done = points.len();
+    for (j, &spp) in opts.path_tracer_spp.iter().enumerate() {
+        progress(done + j, total, &format!("path tracer, {spp} spp"));
+        let ro = ReferenceOptions {
+            spp,
+            bounces: opts.bounces as i32,
+            // Not the reference's own seed: its noise must not cancel.
+            seed: 0x5EED_0000 + spp as u64,
+        };
+        let out = render_reference(scene, &ro, &|_, _| {})?;
+        points.push(ErrorPoint {
+            method: Method::PathTracer { spp },
+            pre_s: 0.0,
+            trav_s: 0.0,
+            others_s: 0.0,
+            total_s: out.seconds,
+            rel_rmse: relative_rmse(&out.image, reference, &mask)?,
+        });
+    }
+    progress(total, total, "done");
+    Ok(points)
+}
+
+/// The path tracer's time to reach `error`, read off its error-vs-time
+/// points on log-log axes (interpolated between the two that bracket it,
+/// else extrapolated along `1/√t` from the nearest).
+pub fn path_tracer_time_for(points: &[ErrorPoint], error: f64) -> Option<f64> {
+    let mut pt: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| matches!(p.method, Method::PathTracer { .. }) && p.total_s > 0.0 && p.rel_rmse > 0.0)
+        .map(|p| (p.total_s, p.rel_rmse))
+        .collect();
+    pt.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (first, last) = (*pt.first()?, *pt.last()?);
+    for w in pt.windows(2) {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        if (e0 >= error && error >= e1) || (e1 >= error && error >= e0) {
+            if e0 == e1 {
+                return Some(t0);
+            }
+            let f = (error.ln() - e0.ln()) / (e1.ln() - e0.ln());
+            return Some((t0.ln() + f * (t1.ln() - t0.ln())).exp());
+        }
+    }
+    // Outside the measured range: error ∝ 1/√t.
+    let (t, e) = if error < last.1 { last } else { first };
+    Some(t * (e / error).powi(2))
+}
+
+/// The sweep as CSV: one line per image.
+pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
+    let mut s =
+        String::from("scene,method,scheme,omega,microbuffer,spp,pre_s,trav_s,others_s,total_s,rel_rmse\n");
+    for p in points {
+        let (method, scheme, omega, n, spp) = match p.method {
+            Method::PointBased {
+                scheme,
+                omega,
+                microbuffer,
+            } => (
+                "pbgi",
+                scheme.name(),
+                omega.to_string(),
+                microbuffer.to_string(),
+                String::new(),
+            ),
+            Method::PathTracer { spp } => ("path-tracer", "", String::new(), String::new(), spp.to_string()),
+        };
+        let _ = writeln!(
+            s,
+            "{scene},{method},{scheme},{omega},{n},{spp},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
+        );
+    }
+    s
+}
+
+/// The sweep as a Markdown table, with the figure that matters most: at the
+/// default settings, the point-based error and time next to the path
+/// tracer's time for the same error.
+pub fn to_markdown(
+    scene: &str,
+    points: &[ErrorPoint],
+    default: &RenderOptions,
+    reference_spp: Option<u32>,
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "## {scene}: error against run time\n");
+    if let Some(spp) = reference_spp {
+        let _ = writeln!(s, "Reference: the path tracer at {spp} spp. ");
+    }
+    let _ = writeln!(
+        s,
+        "Relative RMSE over the pixels that do not see an emitter; times in seconds \
+         (pre., trav. and others summed over threads, total is wall clock).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| method | scheme | Ω | N | spp | pre. | trav. | others | total | rel. RMSE |"
+    );
+    let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for p in points {
+        match p.method {
+            Method::PointBased {
+                scheme,
+                omega,
+                microbuffer,
+            } => {
+                let _ = writeln!(
+                    s,
+                    "| pbgi | {scheme} | {omega} | {microbuffer} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
+                    default.spp, p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
+                );
+            }
+            Method::PathTracer { spp } => {
+                let _ = writeln!(
+                    s,
+                    "| path tracer | | | | {spp} | | | | {:.3} | {:.4} |",
+                    p.total_s, p.rel_rmse
+                );
+            }
+        }
+    }
+    let at_default = points.iter().find(|p| {
+        matches!(p.method, Method::PointBased { omega, microbuffer, .. }
+            if omega == default.max_solid_angle && microbuffer == default.microbuffer)
+    });
+    if let Some(p) = at_default {
+        let _ = write!(
+            s,
+            "\nAt the default settings (Ω {}, microbuffer {}): relative RMSE {:.4} in {:.3} s",
+            default.max_solid_angle, default.microbuffer, p.rel_rmse, p.total_s
+        );
+        match path_tracer_time_for(points, p.rel_rmse) {
+            Some(t) => {
+                let _ = writeln!(
+                    s,
+                    "; the path tracer needs about {t:.3} s for the same error ({:.1}×).",
+                    t / p.total_s
+                );
+            }
+            None => {
+                let _ = writeln!(s, ".");
+            }
+        }
+    }
+    s
+}
