@@ -68,11 +68,13 @@ impl Receiver {
     }
 
     /// Position.
+    #[inline(always)]
     pub fn position(&self) -> Vec3 {
         self.position
     }
 
     /// Unit normal.
+    #[inline(always)]
     pub fn normal(&self) -> Vec3 {
         self.normal
     }

@@ -13,15 +13,26 @@ use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 #[inline(always)]
 pub(crate) fn load_receivers(receivers: &[Receiver]) -> ReceiverLanes<F32s> {
     debug_assert!(!receivers.is_empty() && receivers.len() <= LANES);
-    let lane = |l: usize| receivers.get(l).unwrap_or(&receivers[0]);
-    let field = |g: fn(&Receiver) -> f32| F32s::from_array(std::array::from_fn(|l| g(lane(l))));
+    // Plain loops (no closures passed around): everything here must inline
+    // into the caller's clone.
+    let mut f = [[0.0f32; LANES]; 6];
+    for l in 0..LANES {
+        let r = receivers.get(l).unwrap_or(&receivers[0]);
+        let (p, n) = (r.position(), r.normal());
+        f[0][l] = p.x;
+        f[1][l] = p.y;
+        f[2][l] = p.z;
+        f[3][l] = n.x;
+        f[4][l] = n.y;
+        f[5][l] = n.z;
+    }
     ReceiverLanes {
-        px: field(|r| r.position().x),
-        py: field(|r| r.position().y),
-        pz: field(|r| r.position().z),
-        nx: field(|r| r.normal().x),
-        ny: field(|r| r.normal().y),
-        nz: field(|r| r.normal().z),
+        px: F32s::from_array(f[0]),
+        py: F32s::from_array(f[1]),
+        pz: F32s::from_array(f[2]),
+        nx: F32s::from_array(f[3]),
+        ny: F32s::from_array(f[4]),
+        nz: F32s::from_array(f[5]),
     }
 }
 
