@@ -13,7 +13,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::{CutOptions, CutSink, Isa, LANES, Receiver, Scheme, Traversal, TraversalStats};
 use crate::error::Error;
 use crate::light::Lights;
-use crate::microbuffer::{MicroBuffer, MicroBufferSink};
+use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_cuts, shade_packet};
 use crate::points::bake::{BakeOptions, bake};
 use crate::points::{PointCloud, Surfel};
 use crate::scene::{Bump, Material, Scene, SceneError};
@@ -40,7 +40,7 @@ pub struct RenderOptions {
     pub max_solid_angle: f32,
     /// Hybrid switch threshold (active lanes).
     pub hybrid_threshold: u32,
-    /// Microbuffer resolution N (an N×N hemicube top face).
+    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     pub microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
     pub bounces: u32,
@@ -66,7 +66,7 @@ impl Default for RenderOptions {
             scheme: SchemeChoice::Auto,
             max_solid_angle: 0.05,
             hybrid_threshold: 2,
-            microbuffer: 8,
+            microbuffer: 12,
             bounces: 1,
             spp: 4,
             direct_samples: None,
@@ -211,6 +211,38 @@ impl CutSink for SplatLists {
     #[inline]
     fn splat(&mut self, receiver: usize, node: NodeId) {
         self.0[receiver].push(node);
+    }
+}
+
+/// A packet's cuts as the shading pipeline of the scheme wants them: per
+/// receiver lists for the scalar reference (shaded one node at a time), each
+/// node with its lanes for the vector schemes (shaded 16 lanes at a time).
+pub(crate) enum PacketCuts {
+    Lists(SplatLists),
+    Lanes(PacketCut),
+}
+
+impl PacketCuts {
+    /// The form `scheme`'s pipeline uses.
+    pub fn for_scheme(scheme: Scheme, tree: &Tree) -> Self {
+        match scheme {
+            Scheme::Scalar => PacketCuts::Lists(SplatLists::new()),
+            _ => PacketCuts::Lanes(PacketCut::new(tree)),
+        }
+    }
+
+    /// Cuts `receivers` (one packet) into `self`, which is cleared first.
+    pub fn run(&mut self, traversal: &Traversal, scheme: Scheme, receivers: &[Receiver]) -> TraversalStats {
+        match self {
+            PacketCuts::Lists(l) => {
+                l.clear();
+                traversal.run(scheme, receivers, l)
+            }
+            PacketCuts::Lanes(c) => {
+                c.clear();
+                traversal.run(scheme, receivers, c)
+            }
+        }
     }
 }
 
@@ -517,29 +549,42 @@ impl<'s> Frame<'s> {
             .collect()
     }
 
-    /// Splats each point's cut (`lists`) into `mb` and convolves: the
-    /// indirect light (or `1 − AO`) at each point.
+    /// Splats each point's cut into its microbuffer and convolves, on path
+    /// `isa`: the indirect light (or `1 − AO`) at each point. `bufs` holds at
+    /// least one buffer per point.
     pub(crate) fn shade(
         &self,
         points: &[PacketPoint],
-        lists: &SplatLists,
-        mb: &mut MicroBuffer,
+        cuts: &mut PacketCuts,
+        bufs: &mut [MicroBuffer],
+        isa: Isa,
     ) -> Vec<Vec3> {
         let tree = &self.tree;
+        let bufs = &mut bufs[..points.len()];
+        for (mb, pp) in bufs.iter_mut().zip(points) {
+            mb.reset(pp.point.position, pp.point.normal);
+        }
+        let what = if self.opts.ao {
+            Convolution::Occlusion
+        } else {
+            Convolution::Irradiance
+        };
+        let mut out = vec![Vec3::ZERO; points.len()];
+        match cuts {
+            PacketCuts::Lists(l) => shade_cuts(isa, bufs, tree, &l.0, what, &mut out),
+            PacketCuts::Lanes(c) => shade_packet(isa, bufs, tree, c, what, &mut out),
+        }
         points
             .iter()
-            .zip(&lists.0)
-            .map(|(pp, cut)| {
+            .zip(bufs.iter())
+            .zip(out)
+            .map(|((pp, mb), e)| {
                 let sp = &pp.point;
-                mb.reset(sp.position, sp.normal);
-                for &node in cut {
-                    mb.splat(tree, node);
-                }
                 let m = &self.scene.materials[sp.material];
                 if self.opts.ao {
-                    Vec3::splat(1.0 - mb.occlusion())
+                    Vec3::splat(1.0 - e.x)
                 } else {
-                    let mut l = m.albedo * std::f32::consts::FRAC_1_PI * mb.irradiance(tree);
+                    let mut l = m.albedo * std::f32::consts::FRAC_1_PI * e;
                     if let Some(g) = m.glossy {
                         let lobe = GlossyLobe {
                             specular: g.specular,
@@ -561,8 +606,7 @@ impl<'s> Frame<'s> {
         let wall = Instant::now();
         let opts = &self.opts;
         let traversal = self.traversal()?;
-        let mut mb_proto = MicroBuffer::new(opts.microbuffer)?;
-        mb_proto.reset(Vec3::ZERO, Vec3::Z);
+        let mb_proto = MicroBuffer::new(opts.microbuffer)?;
         let (w, h) = (self.scene.camera.width, self.scene.camera.height);
         let tiles_total = self.tiles();
         progress(0, tiles_total);
@@ -573,8 +617,8 @@ impl<'s> Frame<'s> {
             .into_par_iter()
             .map(|tile| {
                 let mut stats = TraversalStats::default();
-                let mut lists = SplatLists::new();
-                let mut mb = mb_proto.clone();
+                let mut cuts = PacketCuts::for_scheme(self.scheme, &self.tree);
+                let mut bufs = vec![mb_proto.clone(); LANES];
                 let mut receivers_done = 0;
                 let pixels = self.tile_pixels(tile);
                 let mut sums = vec![Vec3::ZERO; pixels.len()];
@@ -587,12 +631,11 @@ impl<'s> Frame<'s> {
                     let mut indirect = vec![Vec3::ZERO; points.len()];
                     if self.needs_points && !points.is_empty() {
                         let receivers = Self::receivers(&points)?;
-                        lists.clear();
                         let t1 = Instant::now();
-                        stats.merge(&traversal.run(self.scheme, &receivers, &mut lists));
+                        stats.merge(&cuts.run(&traversal, self.scheme, &receivers));
                         let t2 = Instant::now();
                         acc_trav.add((t2 - t1).as_secs_f64());
-                        indirect = self.shade(&points, &lists, &mut mb);
+                        indirect = self.shade(&points, &mut cuts, &mut bufs, traversal.isa());
                         acc_others.add(t2.elapsed().as_secs_f64());
                     }
                     for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {

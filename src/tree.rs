@@ -99,6 +99,20 @@ impl NodeArrays {
     }
 }
 
+/// What splatting reads of a node, in one aligned 32-byte record (one cache
+/// line holds a sibling pair): the splat position (the bounding sphere's
+/// centre), the area below the node, the area-weighted mean normal, and
+/// whether it is a leaf.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct SplatRecord {
+    pub center: [f32; 3],
+    pub area: f32,
+    pub normal: [f32; 3],
+    /// 1 for a leaf, 0 for an inner node.
+    pub leaf: u32,
+}
+
 /// A read-only view of one node, for inspection and tests.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodeView {
@@ -146,8 +160,7 @@ pub struct NodeView {
 #[derive(Clone, Debug, Default)]
 pub struct Tree {
     pub(crate) nodes: NodeArrays,
-    area: Vec<f32>,
-    normal: Vec<Vec3>,
+    pub(crate) splat: Vec<SplatRecord>,
     radiance: Vec<Vec3>,
     depth: u32,
 }
@@ -211,8 +224,12 @@ impl Tree {
             } else {
                 NodeArrays::locate(b.child).0 as u32
             };
-            tree.area.push(b.area);
-            tree.normal.push(b.normal);
+            tree.splat.push(SplatRecord {
+                center: b.center,
+                area: b.area,
+                normal: b.normal.to_array(),
+                leaf: u32::from(b.child & LEAF_BIT != 0),
+            });
             tree.radiance.push(b.radiance);
         }
         tree
@@ -233,9 +250,12 @@ impl Tree {
         self.depth as usize
     }
 
-    /// Bytes of node data per surfel (the traversal fields and the shading payload).
+    /// Bytes of node data per surfel (the traversal fields, the splat
+    /// records and the radiance).
     pub fn bytes_per_surfel(&self) -> f64 {
-        let per_node = std::mem::size_of::<PairRecord>() / 2 + 4 + 2 * 12;
+        let per_node = std::mem::size_of::<PairRecord>() / 2
+            + std::mem::size_of::<SplatRecord>()
+            + std::mem::size_of::<Vec3>();
         let surfels = self.len().div_ceil(2).max(1);
         (self.len() * per_node) as f64 / surfels as f64
     }
@@ -265,8 +285,8 @@ impl Tree {
             cone_axis: Vec3::new(g(field::AX), g(field::AY), g(field::AZ)),
             cone_cos: g(field::COS),
             cone_sin: g(field::SIN),
-            area: self.area[k],
-            normal: self.normal[k],
+            area: self.splat[k].area,
+            normal: Vec3::from_array(self.splat[k].normal),
             radiance: self.radiance[k],
             children: self.left_child(node),
             surfel: (c & LEAF_BIT != 0).then_some(c & !LEAF_BIT),
@@ -276,19 +296,25 @@ impl Tree {
     /// Total surfel area below `node` (shading payload).
     #[inline]
     pub fn area(&self, node: NodeId) -> f32 {
-        self.area[node as usize]
+        self.splat[node as usize].area
     }
 
     /// Area-weighted mean normal below `node` (length ≤ 1; shorter where normals spread).
     #[inline]
     pub fn mean_normal(&self, node: NodeId) -> Vec3 {
-        self.normal[node as usize]
+        Vec3::from_array(self.splat[node as usize].normal)
     }
 
     /// Area-weighted mean outgoing radiance below `node`.
     #[inline]
     pub fn radiance(&self, node: NodeId) -> Vec3 {
         self.radiance[node as usize]
+    }
+
+    /// The radiance of every node, indexed by node.
+    #[inline]
+    pub(crate) fn radiance_slice(&self) -> &[Vec3] {
+        &self.radiance
     }
 
     /// Bounding-sphere centre and radius of `node`.

@@ -2,7 +2,7 @@
 //! analytic irradiance, and bitwise identical shading for every scheme and path.
 
 use glam::Vec3;
-use pbgi::microbuffer::{MicroBuffer, MicroBufferSink};
+use pbgi::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_cuts, shade_packet};
 use pbgi::{CutOptions, Isa, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 
 const L: f32 = 2.0;
@@ -42,6 +42,55 @@ fn irradiance(
         out.extend(buffers.iter().map(|b| b.irradiance(tree)));
     }
     out
+}
+
+/// Irradiance through the renderer's two shading pipelines on `isa`: the
+/// scalar one (each receiver's cut, one node at a time) and the 16-lane one
+/// (the packet's cut, gathered from `scheme`'s splats).
+fn irradiance_pipelines(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+    scheme: Scheme,
+    isa: Isa,
+) -> (Vec<Vec3>, Vec<Vec3>) {
+    let t = Traversal::new(
+        tree,
+        CutOptions {
+            max_solid_angle: omega,
+            isa: Some(isa),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (mut scalar, mut lanes) = (Vec::new(), Vec::new());
+    let mut cut = PacketCut::new(tree);
+    for chunk in receivers.chunks(16) {
+        let mut buffers = vec![MicroBuffer::new(res).unwrap(); chunk.len()];
+        let reset = |buffers: &mut Vec<MicroBuffer>| {
+            for (b, r) in buffers.iter_mut().zip(chunk) {
+                b.reset(r.position(), r.normal());
+            }
+        };
+        let mut out = vec![Vec3::NAN; chunk.len()];
+        reset(&mut buffers);
+        let cuts: Vec<Vec<u32>> = t.cuts(scheme, chunk).into_iter().map(|c| c.splats).collect();
+        shade_cuts(isa, &mut buffers, tree, &cuts, Convolution::Irradiance, &mut out);
+        scalar.extend_from_slice(&out);
+        reset(&mut buffers);
+        t.run(scheme, chunk, &mut cut);
+        shade_packet(
+            isa,
+            &mut buffers,
+            tree,
+            &mut cut,
+            Convolution::Irradiance,
+            &mut out,
+        );
+        lanes.extend_from_slice(&out);
+    }
+    (scalar, lanes)
 }
 
 /// Inward-facing surfels on a Fibonacci sphere of radius 1, disks covering it.
@@ -174,18 +223,29 @@ fn every_scheme_and_path_shades_bit_identically() {
                     reference.iter().any(|e| e.max_element() > 0.0),
                     "no light reached: the test proves nothing"
                 );
+                let bits = |v: &[Vec3]| {
+                    v.iter()
+                        .flat_map(|x| x.to_array().map(f32::to_bits))
+                        .collect::<Vec<_>>()
+                };
                 for isa in Isa::available() {
                     for scheme in Scheme::ALL {
                         let e = irradiance(&tree, &recs, omega, res, scheme, isa);
-                        let bits = |v: &[Vec3]| {
-                            v.iter()
-                                .flat_map(|x| x.to_array().map(f32::to_bits))
-                                .collect::<Vec<_>>()
-                        };
                         assert_eq!(
                             bits(&e),
                             bits(&reference),
                             "{scheme} on {isa}, Ω {omega}, N {res}"
+                        );
+                        let (scalar, lanes) = irradiance_pipelines(&tree, &recs, omega, res, scheme, isa);
+                        assert_eq!(
+                            bits(&scalar),
+                            bits(&reference),
+                            "scalar shading of {scheme} cuts on {isa}, Ω {omega}, N {res}"
+                        );
+                        assert_eq!(
+                            bits(&lanes),
+                            bits(&reference),
+                            "16-lane shading of {scheme} cuts on {isa}, Ω {omega}, N {res}"
                         );
                     }
                 }

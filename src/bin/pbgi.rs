@@ -78,7 +78,7 @@ struct ReportArgs {
     )]
     omegas: Vec<f32>,
     /// Microbuffer resolutions swept besides the default (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "4,16")]
+    #[arg(long, value_delimiter = ',', default_value = "8,16")]
     microbuffers: Vec<usize>,
     /// Schemes to time (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
@@ -108,7 +108,7 @@ struct Settings {
     /// Ω: largest solid angle (sr) of a splatted cluster (the report's default point).
     #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
     max_solid_angle: f32,
-    /// Microbuffer resolution N (hemicube top face N×N).
+    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
     microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce.
@@ -177,7 +177,7 @@ struct RenderArgs {
     /// Ω: largest solid angle (sr) of a splatted cluster.
     #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
     max_solid_angle: f32,
-    /// Microbuffer resolution N (hemicube top face N×N).
+    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
     microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).

@@ -3,7 +3,7 @@
 //! the same order. Only `+ - * sqrt` and comparisons: no FMA contraction, no
 //! reciprocal estimates, so every path classifies every node identically.
 
-use std::ops::{Add, BitAnd, BitOr, Mul, Neg, Not, Sub};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 use std::simd::prelude::*;
 
 use crate::tree::{NodeArrays, field};
@@ -17,14 +17,32 @@ pub type F32s = Simd<f32, LANES>;
 pub type M32s = Mask<i32, LANES>;
 
 /// A scalar `f32` or a vector of them, with the few operations the node test uses.
+///
+/// Every operation is one correctly rounded IEEE operation (or exact), so a
+/// lane computes bit for bit what the scalar code computes; `max`/`min` are
+/// defined by a comparison and a select, not by the instruction set's own
+/// (whose NaN and ±0 rules differ between x86, ARM and `f32::max`).
 pub(crate) trait Real:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask> + Not<Output = Self::Mask>;
     fn splat(x: f32) -> Self;
     fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
     fn le(self, o: Self) -> Self::Mask;
     fn lt(self, o: Self) -> Self::Mask;
+    /// `if m { a } else { b }` per lane.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+    /// `if self > o { self } else { o }`: `o` when either is NaN.
+    #[inline(always)]
+    fn max_of(self, o: Self) -> Self {
+        Self::select(o.lt(self), self, o)
+    }
+    /// `if self < o { self } else { o }`: `o` when either is NaN.
+    #[inline(always)]
+    fn min_of(self, o: Self) -> Self {
+        Self::select(self.lt(o), self, o)
+    }
 }
 
 impl Real for f32 {
@@ -36,6 +54,14 @@ impl Real for f32 {
     #[inline(always)]
     fn sqrt(self) -> Self {
         f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn select(m: bool, a: Self, b: Self) -> Self {
+        if m { a } else { b }
     }
     #[inline(always)]
     fn le(self, o: Self) -> bool {
@@ -56,6 +82,14 @@ impl Real for F32s {
     #[inline(always)]
     fn sqrt(self) -> Self {
         std::simd::StdFloat::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        SimdFloat::abs(self)
+    }
+    #[inline(always)]
+    fn select(m: M32s, a: Self, b: Self) -> Self {
+        std::simd::Select::select(m, a, b)
     }
     #[inline(always)]
     fn le(self, o: Self) -> M32s {

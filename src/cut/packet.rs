@@ -16,6 +16,7 @@ pub(crate) fn load_receivers(receivers: &[Receiver]) -> ReceiverLanes<F32s> {
     // Plain loops (no closures passed around): everything here must inline
     // into the caller's clone.
     let mut f = [[0.0f32; LANES]; 6];
+    #[allow(clippy::needless_range_loop)] // `l` picks a receiver and a lane
     for l in 0..LANES {
         let r = receivers.get(l).unwrap_or(&receivers[0]);
         let (p, n) = (r.position(), r.normal());

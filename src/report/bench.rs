@@ -12,9 +12,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::cut::LANES;
 use crate::cut::{CutSink, Isa, Scheme, TraversalStats};
 use crate::microbuffer::MicroBuffer;
-use crate::render::{Frame, PacketPoint, RenderError, RenderOptions, SplatLists};
+use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions};
 use crate::scene::Scene;
 use crate::tree::NodeId;
 
@@ -64,8 +65,10 @@ pub struct BenchRow {
     pub pre_s: f64,
     /// Seconds for the cuts of every receiver with this scheme.
     pub trav_s: f64,
-    /// Seconds for splatting the cuts into the microbuffers and convolving
-    /// (the same cuts for every scheme, so measured once per scene).
+    /// Seconds for splatting the cuts into the microbuffers and convolving:
+    /// the scalar pipeline (one node, one pixel at a time) for the scalar
+    /// reference, the 16-lane one for the vector schemes (the same cuts, so
+    /// measured once per scene and pipeline).
     pub others_s: f64,
     /// The scalar traversal's time over this one's, from the same run.
     pub speedup_vs_scalar: f64,
@@ -248,24 +251,33 @@ pub fn bench(
     }
 
     // others: splatting and convolution of the (identical) cuts, timed apart
-    // from the traversal that makes them; thread-seconds over threads.
-    let mut proto = MicroBuffer::new(frame.opts.microbuffer)?;
-    proto.reset(glam::Vec3::ZERO, glam::Vec3::Z);
-    let shade_ns: u64 = packets
-        .par_iter()
-        .map_init(
-            || (SplatLists::new(), proto.clone()),
-            |(lists, mb), p| {
-                lists.clear();
-                traversal.run(Scheme::Packet, &p.receivers, lists);
-                let t0 = Instant::now();
-                let l = frame.shade(&p.points, lists, mb);
-                std::hint::black_box(l);
-                t0.elapsed().as_nanos() as u64
-            },
-        )
-        .sum();
-    let others = shade_ns as f64 * 1e-9 / threads as f64;
+    // from the traversal that makes them, in both pipelines: the scalar one
+    // (the scalar row's) and the 16-lane one (every other row's).
+    // Thread-seconds over threads.
+    let proto = MicroBuffer::new(frame.opts.microbuffer)?;
+    let isa = traversal.isa();
+    let mut others = [0.0; 2];
+    for (o, scheme) in others.iter_mut().zip([Scheme::Scalar, Scheme::Packet]) {
+        let shade_ns: u64 = packets
+            .par_iter()
+            .map_init(
+                || {
+                    (
+                        PacketCuts::for_scheme(scheme, frame.tree()),
+                        vec![proto.clone(); LANES],
+                    )
+                },
+                |(cuts, bufs), p| {
+                    cuts.run(&traversal, scheme, &p.receivers);
+                    let t0 = Instant::now();
+                    let l = frame.shade(&p.points, cuts, bufs, isa);
+                    std::hint::black_box(l);
+                    t0.elapsed().as_nanos() as u64
+                },
+            )
+            .sum();
+        *o = shade_ns as f64 * 1e-9 / threads as f64;
+    }
     progress(passes, passes);
 
     let tree = frame.tree();
@@ -285,7 +297,11 @@ pub fn bench(
                 receivers,
                 pre_s: frame.pre_seconds(),
                 trav_s: best[i],
-                others_s: others,
+                others_s: if scheme == Scheme::Scalar {
+                    others[0]
+                } else {
+                    others[1]
+                },
                 speedup_vs_scalar: scalar_trav / best[i],
                 lane_utilization: stats.lane_utilization(),
                 nodes_per_receiver: stats.nodes_per_receiver(),

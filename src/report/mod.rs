@@ -149,7 +149,7 @@ impl Default for SweepOptions {
                 ..RenderOptions::default()
             },
             omegas: vec![0.3, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001],
-            microbuffers: vec![4, 16],
+            microbuffers: vec![8, 16],
             schemes: Scheme::ALL.to_vec(),
             omega_zero: true,
             path_tracer_spp: vec![1, 4, 16, 64, 256],

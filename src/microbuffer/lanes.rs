@@ -1,0 +1,462 @@
+//! Splatting and convolution, written once over lanes like the node test:
+//! [`locate`] places a splat for one receiver (`f32`) or sixteen (`F32s`)
+//! with the same IEEE operations, so the scalar pipeline and the 16-lane one
+//! write the same pixels, bit for bit.
+//!
+//! The 16-lane pipeline takes a packet's cut as each node with the lanes
+//! (receivers) whose cut holds it ([`PacketCut`]): the node's record is read
+//! once and broadcast, the receivers' frames sit in the lanes, and the lanes
+//! where it shows are rasterized each into its own microbuffer. The
+//! convolution takes 16 pixels at a time.
+//!
+//! [`shade_cuts`] (scalar) and [`shade_packet`] (lanes) are compiled for
+//! every instruction-set path like the traversal kernels, and run on the
+//! path they are given.
+
+use std::simd::prelude::*;
+
+use glam::Vec3;
+
+use super::{COVER_ONE, MicroBuffer, NO_KEY};
+use crate::cut::node_test::{F32s, LANES, Real};
+use crate::cut::{CutSink, Isa};
+use crate::tree::{NodeId, SplatRecord, Tree};
+
+/// What splatting reads of a node, for one node or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct NodeSplat<V> {
+    pub cx: V,
+    pub cy: V,
+    pub cz: V,
+    pub area: V,
+    pub nx: V,
+    pub ny: V,
+    pub nz: V,
+}
+
+impl NodeSplat<f32> {
+    #[inline(always)]
+    pub fn of(r: &SplatRecord) -> Self {
+        NodeSplat {
+            cx: r.center[0],
+            cy: r.center[1],
+            cz: r.center[2],
+            area: r.area,
+            nx: r.normal[0],
+            ny: r.normal[1],
+            nz: r.normal[2],
+        }
+    }
+
+    /// The same node in every lane.
+    #[inline(always)]
+    fn splat(&self) -> NodeSplat<F32s> {
+        NodeSplat {
+            cx: F32s::splat(self.cx),
+            cy: F32s::splat(self.cy),
+            cz: F32s::splat(self.cz),
+            area: F32s::splat(self.area),
+            nx: F32s::splat(self.nx),
+            ny: F32s::splat(self.ny),
+            nz: F32s::splat(self.nz),
+        }
+    }
+}
+
+/// A receiver's position and tangent frame (`t`, `b`, `n`), for one
+/// receiver or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct FrameLanes<V> {
+    pub px: V,
+    pub py: V,
+    pub pz: V,
+    pub tx: V,
+    pub ty: V,
+    pub tz: V,
+    pub bx: V,
+    pub by: V,
+    pub bz: V,
+    pub nx: V,
+    pub ny: V,
+    pub nz: V,
+}
+
+impl FrameLanes<F32s> {
+    /// The frames of up to 16 buffers in the lanes; unused lanes repeat the first.
+    #[inline(always)]
+    fn of(bufs: &[MicroBuffer]) -> Self {
+        let mut f = [[0.0f32; LANES]; 12];
+        #[allow(clippy::needless_range_loop)] // `l` picks a buffer and a lane
+        for l in 0..LANES {
+            let b = bufs.get(l).unwrap_or(&bufs[0]).frame_lanes();
+            let v = [
+                b.px, b.py, b.pz, b.tx, b.ty, b.tz, b.bx, b.by, b.bz, b.nx, b.ny, b.nz,
+            ];
+            for (j, x) in v.into_iter().enumerate() {
+                f[j][l] = x;
+            }
+        }
+        let g = |j: usize| F32s::from_array(f[j]);
+        FrameLanes {
+            px: g(0),
+            py: g(1),
+            pz: g(2),
+            tx: g(3),
+            ty: g(4),
+            tz: g(5),
+            bx: g(6),
+            by: g(7),
+            bz: g(8),
+            nx: g(9),
+            ny: g(10),
+            nz: g(11),
+        }
+    }
+}
+
+/// A splat placed in a receiver's microbuffer: distance and direction
+/// (local) of its centre, projected solid angle, continuous pixel
+/// coordinates; `valid` is false where it cannot show.
+pub(crate) struct Located<V: Real> {
+    pub valid: V::Mask,
+    pub d: V,
+    pub omega: V,
+    pub wx: V,
+    pub wy: V,
+    pub wz: V,
+    pub x: V,
+    pub y: V,
+}
+
+/// Places node `s` in the microbuffer of receiver `f` (`half` = `N/2`).
+///
+/// `Ω = A·max(0, −n̄·ω)/d²`; the centre's local direction `w` goes through
+/// the octahedral map (a centre below the horizon to the horizon point
+/// above it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
+/// non-finite distance or `Ω`, a node facing away, a centre straight below.
+#[inline(always)]
+pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> Located<V> {
+    let vx = s.cx - f.px;
+    let vy = s.cy - f.py;
+    let vz = s.cz - f.pz;
+    let d2 = vx * vx + vy * vy + vz * vz;
+    let d = d2.sqrt();
+    let (dx, dy, dz) = (vx / d, vy / d, vz / d);
+    let zero = V::splat(0.0);
+    let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
+    let raw = s.area * facing.max_of(zero) / d2;
+    // A huge node right in front of the receiver overflows the far-field
+    // estimate; it covers at most the hemisphere.
+    let omega = raw.min_of(V::splat(std::f32::consts::TAU));
+    let wx = dx * f.tx + dy * f.ty + dz * f.tz;
+    let wy = dx * f.bx + dy * f.by + dz * f.bz;
+    let wz = dx * f.nx + dy * f.ny + dz * f.nz;
+    let sum = wx.abs() + wy.abs() + wz.max_of(zero);
+    let (px, py) = (wx / sum, wy / sum);
+    let one = V::splat(1.0);
+    let x = (px + py + one) * half;
+    let y = (px - py + one) * half;
+    let inf = V::splat(f32::INFINITY);
+    let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum);
+    Located {
+        valid,
+        d,
+        omega,
+        wx,
+        wy,
+        wz,
+        x,
+        y,
+    }
+}
+
+/// `a[0] + a[1] + … + a[15]`, in that order: how the 16 partial sums of a
+/// convolution are added up, in both pipelines.
+#[inline(always)]
+pub(crate) fn sum(a: [f32; LANES]) -> f32 {
+    let mut s = 0.0;
+    for x in a {
+        s += x;
+    }
+    s
+}
+
+/// A packet's cut, each node once with the lanes (receivers `0..16` of the
+/// packet) whose cut holds it, gathered from any scheme's splats. Reusable:
+/// [`clear`](Self::clear) between packets.
+#[derive(Clone, Debug)]
+pub struct PacketCut {
+    /// Nodes in the order first splatted.
+    nodes: Vec<NodeId>,
+    /// Per node of the tree: the lanes splatting it in this packet.
+    lanes: Vec<u16>,
+}
+
+impl PacketCut {
+    /// An empty cut for packets over `tree`.
+    pub fn new(tree: &Tree) -> Self {
+        PacketCut {
+            nodes: Vec::new(),
+            lanes: vec![0; tree.len()],
+        }
+    }
+
+    /// Forgets the last packet.
+    pub fn clear(&mut self) {
+        for &k in &self.nodes {
+            self.lanes[k as usize] = 0;
+        }
+        self.nodes.clear();
+    }
+
+    /// Splats in the cut (a node counts once per receiver).
+    pub fn splats(&self) -> usize {
+        self.nodes
+            .iter()
+            .map(|&k| self.lanes[k as usize].count_ones() as usize)
+            .sum()
+    }
+
+    #[inline(always)]
+    fn add(&mut self, node: NodeId, lanes: u16) {
+        if node as usize >= self.lanes.len() {
+            // A node of another tree: grow rather than fail.
+            self.lanes.resize(node as usize + 1, 0);
+        }
+        let m = &mut self.lanes[node as usize];
+        if *m == 0 {
+            self.nodes.push(node);
+        }
+        *m |= lanes;
+    }
+}
+
+impl CutSink for PacketCut {
+    #[inline(always)]
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        debug_assert!(receiver < LANES, "a packet has 16 receivers");
+        self.add(node, 1 << receiver);
+    }
+
+    #[inline(always)]
+    fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
+        debug_assert!(base == 0, "a packet's receivers start at 0");
+        self.add(node, lanes << base);
+    }
+}
+
+/// The convolution a shading pass ends with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Convolution {
+    /// Irradiance `E` (RGB).
+    Irradiance,
+    /// Ambient occlusion `AO` ∈ [0, 1], in every channel.
+    Occlusion,
+}
+
+/// Splats cut `cuts[i]` into `bufs[i]` (each reset to its receiver
+/// beforehand) and convolves it into `out[i]`: the scalar reference, one
+/// node and one pixel at a time, on path `isa`.
+pub fn shade_cuts(
+    isa: Isa,
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cuts: &[Vec<NodeId>],
+    what: Convolution,
+    out: &mut [Vec3],
+) {
+    assert!(
+        cuts.len() >= bufs.len() && out.len() >= bufs.len(),
+        "a cut and an output per buffer"
+    );
+    match isa {
+        // SAFETY (each arm): an `Isa` reaches here only from a `Traversal`,
+        // which holds one the CPU was detected to run.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => unsafe { cuts_avx512(bufs, tree, cuts, what, out) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { cuts_avx2(bufs, tree, cuts, what, out) },
+        #[cfg(target_arch = "aarch64")]
+        Isa::Neon => unsafe { cuts_neon(bufs, tree, cuts, what, out) },
+        _ => cuts_portable(bufs, tree, cuts, what, out),
+    }
+}
+
+/// Splats a packet's cut into its receivers' buffers `bufs` (at most 16,
+/// each reset beforehand) and convolves each into `out[i]`, 16 lanes at a
+/// time, on path `isa`; leaves `cut` cleared. Gives the bits of
+/// [`shade_cuts`] on the same cuts.
+pub fn shade_packet(
+    isa: Isa,
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cut: &mut PacketCut,
+    what: Convolution,
+    out: &mut [Vec3],
+) {
+    assert!(
+        bufs.len() <= LANES && out.len() >= bufs.len(),
+        "at most 16 buffers, an output each"
+    );
+    if !bufs.is_empty() {
+        match isa {
+            // SAFETY: as in `shade_cuts`.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => unsafe { packet_avx512(bufs, tree, cut, what, out) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { packet_avx2(bufs, tree, cut, what, out) },
+            #[cfg(target_arch = "aarch64")]
+            Isa::Neon => unsafe { packet_neon(bufs, tree, cut, what, out) },
+            _ => packet_portable(bufs, tree, cut, what, out),
+        }
+    }
+    cut.clear();
+}
+
+macro_rules! clones {
+    ($body:ident, ($($arg:ident: $ty:ty),*), $avx512:ident, $avx2:ident, $neon:ident, $portable:ident) => {
+        #[multiversion::target("x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl")]
+        fn $avx512($($arg: $ty),*) {
+            $body($($arg),*)
+        }
+        #[multiversion::target("x86_64+avx2+fma")]
+        fn $avx2($($arg: $ty),*) {
+            $body($($arg),*)
+        }
+        #[multiversion::target("aarch64+neon")]
+        fn $neon($($arg: $ty),*) {
+            $body($($arg),*)
+        }
+        #[inline(never)]
+        fn $portable($($arg: $ty),*) {
+            $body($($arg),*)
+        }
+    };
+}
+
+clones!(
+    cuts_body,
+    (bufs: &mut [MicroBuffer], tree: &Tree, cuts: &[Vec<NodeId>], what: Convolution, out: &mut [Vec3]),
+    cuts_avx512,
+    cuts_avx2,
+    cuts_neon,
+    cuts_portable
+);
+
+clones!(
+    packet_body,
+    (bufs: &mut [MicroBuffer], tree: &Tree, cut: &mut PacketCut, what: Convolution, out: &mut [Vec3]),
+    packet_avx512,
+    packet_avx2,
+    packet_neon,
+    packet_portable
+);
+
+#[inline(always)]
+fn cuts_body(
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cuts: &[Vec<NodeId>],
+    what: Convolution,
+    out: &mut [Vec3],
+) {
+    for ((mb, cut), o) in bufs.iter_mut().zip(cuts).zip(out.iter_mut()) {
+        for &node in cut {
+            let Some(rec) = tree.splat.get(node as usize) else {
+                continue; // not a node of `tree`
+            };
+            if let Some(s) = mb.locate(rec) {
+                mb.apply(rec, node, &s);
+            }
+        }
+        *o = match what {
+            Convolution::Irradiance => mb.irradiance(tree),
+            Convolution::Occlusion => Vec3::splat(mb.occlusion()),
+        };
+    }
+}
+
+#[inline(always)]
+fn packet_body(
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cut: &mut PacketCut,
+    what: Convolution,
+    out: &mut [Vec3],
+) {
+    let frames = FrameLanes::of(bufs);
+    let half = F32s::splat(bufs[0].half_n());
+    let used = crate::cut::node_test::lane_mask(bufs.len());
+    for &node in &cut.nodes {
+        let lanes = cut.lanes[node as usize] & used;
+        let Some(rec) = tree.splat.get(node as usize) else {
+            continue; // not a node of `tree`
+        };
+        let l = locate(&NodeSplat::of(rec).splat(), &frames, half);
+        let mut show = l.valid.to_bitmask() as u16 & lanes;
+        if show == 0 {
+            continue;
+        }
+        let (d, omega, x, y) = (l.d.to_array(), l.omega.to_array(), l.x.to_array(), l.y.to_array());
+        let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());
+        while show != 0 {
+            let i = show.trailing_zeros() as usize;
+            show &= show - 1;
+            let mb = &mut bufs[i];
+            let s = mb.spot(d[i], omega[i], Vec3::new(wx[i], wy[i], wz[i]), x[i], y[i]);
+            mb.apply(rec, node, &s);
+        }
+    }
+    for (mb, o) in bufs.iter().zip(out.iter_mut()) {
+        *o = convolve(mb, tree, what);
+    }
+}
+
+/// [`MicroBuffer::irradiance`] (or occlusion) 16 pixels at a time, in the
+/// same order of operations.
+#[inline(always)]
+fn convolve(mb: &MicroBuffer, tree: &Tree, what: Convolution) -> Vec3 {
+    let table = &*mb.table;
+    let no_key = Simd::<u64, LANES>::splat(NO_KEY);
+    let low = Simd::<u64, LANES>::splat(0xFFFF_FFFF);
+    let inv_one = F32s::splat(1.0 / COVER_ONE);
+    let (one, zero) = (F32s::splat(1.0), F32s::splat(0.0));
+    let radiance = tree.radiance_slice();
+    let mut acc = [zero; 3];
+    for c in (0..table.cos_weight.len()).step_by(LANES) {
+        let own = Simd::<u64, LANES>::from_slice(&mb.own[c..c + LANES]);
+        let any = Simd::<u64, LANES>::from_slice(&mb.any[c..c + LANES]);
+        let key = own.simd_ne(no_key).select(own, any);
+        let valid = key.simd_ne(no_key);
+        let cover = Simd::<u32, LANES>::from_slice(&mb.cover[c..c + LANES]).cast::<f32>() * inv_one;
+        let cw = F32s::from_slice(&table.cos_weight[c..c + LANES]);
+        let w = F32s::select(valid.cast::<i32>(), cover.min_of(one) * cw, zero);
+        match what {
+            Convolution::Occlusion => acc[0] += w,
+            Convolution::Irradiance => {
+                let node = valid.select(key & low, Simd::splat(0)).cast::<usize>().to_array();
+                let mut l = [[0.0f32; LANES]; 3];
+                for (i, &k) in node.iter().enumerate() {
+                    // Node 0 stands for an empty pixel (weight 0); a tree without it is empty.
+                    let r = radiance.get(k).copied().unwrap_or(Vec3::ZERO);
+                    l[0][i] = r.x;
+                    l[1][i] = r.y;
+                    l[2][i] = r.z;
+                }
+                for (a, l) in acc.iter_mut().zip(l) {
+                    *a += F32s::from_array(l) * w;
+                }
+            }
+        }
+    }
+    match what {
+        Convolution::Irradiance => Vec3::new(
+            sum(acc[0].to_array()),
+            sum(acc[1].to_array()),
+            sum(acc[2].to_array()),
+        ),
+        Convolution::Occlusion => {
+            Vec3::splat((sum(acc[0].to_array()) * std::f32::consts::FRAC_1_PI).min_of(1.0))
+        }
+    }
+}
