@@ -443,9 +443,13 @@ impl MicroBuffer {
         let dir = v / d;
         let mean_normal = tree.mean_normal(node);
         let omega = tree.area(node) * (-mean_normal.dot(dir)).max(0.0) / d2;
-        if !(omega > 0.0 && omega.is_finite()) {
-            return;
+        if omega.is_nan() || omega <= 0.0 {
+            return; // facing away, edge on
         }
+        // A huge node very near overflows the estimate (or makes it exceed the
+        // hemisphere, where the cone's rim would grow without bound and its
+        // coverage sink to one half): no splat covers more than 2π.
+        let omega = omega.min(std::f32::consts::TAU);
         let w = self.to_local(dir);
         let key = key(d, node);
         let spot = self.table.spot(w);
