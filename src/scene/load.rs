@@ -76,7 +76,23 @@ fn parse_err(path: &Path, line: usize, message: impl Into<String>) -> SceneError
     }
 }
 
+/// Only regular files are read: a device (`/dev/zero`, a FIFO) named by a
+/// scene or linked to would be read forever.
+fn regular_file(path: &Path) -> Result<(), SceneError> {
+    let io = |message: String| SceneError::Io {
+        path: path.to_path_buf(),
+        message,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(io("not a regular file".into()))
+    }
+}
+
 fn read_text(path: &Path) -> Result<String, SceneError> {
+    regular_file(path)?;
     std::fs::read_to_string(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -157,6 +173,7 @@ struct PlyElement {
 /// Reads a PLY mesh: vertices x, y, z (and nx, ny, nz), faces as index lists
 /// (fan-triangulated); other properties and elements are skipped.
 pub fn read_ply(path: &Path) -> Result<Mesh, SceneError> {
+    regular_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -442,7 +459,17 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         single_index: true,
         ..Default::default()
     };
-    let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| parse_err(path, 0, e.to_string()))?;
+    // The text already read; material libraries relative to the file, and
+    // regular files only (as tobj's `load_obj` would, but for the check).
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl_path| {
+        let full = dir.join(mtl_path);
+        if regular_file(&full).is_err() {
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+        tobj::load_mtl(full)
+    })
+    .map_err(|e| parse_err(path, 0, e.to_string()))?;
     let mut warnings = Vec::new();
     let mtl = mtl.unwrap_or_else(|e| {
         warnings.push(format!(
