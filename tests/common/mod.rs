@@ -1045,9 +1045,10 @@ pub fn shade_everywhere(
 
 /// The energy bounds: irradiance finite, ≥ 0 and at most `π · max L` per
 /// channel (coverage ≤ 1 per pixel and `Σ ∫cosθ dω = π`; the slack is f32
-/// rounding of the pixel sums), ambient occlusion in [0, 1].
+/// rounding of the pixel sums: relative, and absolute for subnormal radiance,
+/// where each term rounds by up to 2⁻¹⁴⁹), ambient occlusion in [0, 1].
 pub fn check_bounded(shading: &[(Vec3, f32)], max_radiance: Vec3) -> Result<(), String> {
-    let bound = max_radiance * std::f32::consts::PI * 1.0001;
+    let bound = max_radiance * std::f32::consts::PI * 1.0001 + Vec3::splat(f32::MIN_POSITIVE);
     for (i, &(e, ao)) in shading.iter().enumerate() {
         if !(e.is_finite() && e.min_element() >= 0.0) {
             return Err(format!("receiver {i}: irradiance {e} is not finite and ≥ 0"));
