@@ -16,6 +16,17 @@ pub enum Invalid {
     NonPositiveRadius(f32),
     /// A radiance component is negative.
     NegativeRadiance,
+    /// A value beyond the supported range: a position component or the radius
+    /// beyond [`MAX_COORDINATE`](crate::points::MAX_COORDINATE), a radiance
+    /// component beyond [`MAX_RADIANCE`](crate::points::MAX_RADIANCE).
+    TooLarge {
+        /// The field holding it (`"position"`, `"radius"`, `"radiance"`).
+        field: &'static str,
+        /// The largest offending value (absolute value for a position).
+        value: f32,
+        /// The most accepted.
+        max: f32,
+    },
     /// The normal has length zero.
     ZeroNormal,
     /// The normal is not of unit length (within [`NORMAL_TOLERANCE`]).
@@ -90,6 +101,7 @@ impl fmt::Display for Invalid {
             Invalid::NonFinite { field } => write!(f, "{field} is not finite"),
             Invalid::NonPositiveRadius(r) => write!(f, "radius {r} is not positive"),
             Invalid::NegativeRadiance => write!(f, "radiance has a negative component"),
+            Invalid::TooLarge { field, value, max } => write!(f, "{field} {value:e} exceeds {max:e}"),
             Invalid::ZeroNormal => write!(f, "normal has zero length"),
             Invalid::NonUnitNormal { length } => {
                 write!(f, "normal has length {length}, expected 1")

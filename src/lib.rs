@@ -39,6 +39,36 @@
 //! }
 //! # Ok::<(), pbgi::Error>(())
 //! ```
+//!
+//! # Numerical range and stability
+//!
+//! Checked in `tests/stability.rs`, which lists every case:
+//!
+//! * **Inputs**: finite; positions and radii within
+//!   [`MAX_COORDINATE`](points::MAX_COORDINATE) (10³⁷), radiance within
+//!   [`MAX_RADIANCE`](points::MAX_RADIANCE) (10³⁰), unit normals; anything
+//!   else is an [`Error`] naming the surfel or receiver. Within that range no
+//!   NaN or infinity leaves the library (node areas saturate at `f32::MAX`),
+//!   irradiance is at most `π · max L` per channel and ambient occlusion in
+//!   `[0, 1]`. The tree aggregates area-weighted radiance in `f64`, so one
+//!   scene may span 10⁻³⁰ … 10³⁰. Subnormal values are accepted.
+//! * **Scale**: scaling surfels and receivers by `2^k` (k within ±40 for a
+//!   unit-sized scene) gives the identical cut and the identical irradiance,
+//!   bit for bit.
+//! * **Far from the origin**: positions are `f32`, so at distance `T` the
+//!   input itself is rounded to half an ulp of `T`. The node test and the
+//!   microbuffer subtract nearby `f32` values exactly; with Ω = 0 a translated
+//!   scene shades bit for bit like the same rounded scene at the origin, and
+//!   with Ω > 0 only the inner nodes' stored centres add rounding, less than
+//!   the input's own (on a unit box: 0.04 % RMS at 10⁴, 0.6 % at 10⁷, while
+//!   the input's rounding alone costs 0.1 % and 33 %). Keep a scene's
+//!   coordinates small relative to its detail, or centre it.
+//! * **Depth**: the median split gives depth ⌈log₂ n⌉ whatever the positions,
+//!   at most [`MAX_DEPTH`](tree::MAX_DEPTH) = 30; the traversal stacks are
+//!   sized for it.
+//! * **Ω**: any finite Ω ≥ 0 is accepted; from Ω ≥ π on, the node test
+//!   `π R² < Ω d²` may splat a node whose sphere contains the receiver, and
+//!   the estimate degrades (bounded, not accurate).
 #![feature(portable_simd)]
 #![warn(missing_docs)]
 

@@ -7,17 +7,28 @@ use glam::Vec3;
 
 use crate::error::{Error, Invalid, NORMAL_TOLERANCE};
 
+/// Largest accepted radiance component. The shading sums stay far from `f32`
+/// overflow below it: irradiance is at most `π · max L`, and a sharp glossy
+/// lobe (whose peak is a few 10⁵ at the smallest roughness) times the
+/// microbuffer's solid angles at most about 10⁶ · max L.
+pub const MAX_RADIANCE: f32 = 1e30;
+
+/// Largest accepted position component and radius. Every bounding sphere of
+/// the tree then has a finite centre and radius (at most about 5·10³⁷); node
+/// areas, sums of `π r²`, saturate at `f32::MAX` instead of overflowing.
+pub const MAX_COORDINATE: f32 = 1e37;
+
 /// One surfel: a disk at `position` facing `normal`, of `radius`, emitting
 /// `radiance` (outgoing diffuse radiance, RGB) from its front side.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surfel {
-    /// Centre of the disk.
+    /// Centre of the disk, each component within `±MAX_COORDINATE`.
     pub position: Vec3,
     /// Unit normal; the disk emits on this side only.
     pub normal: Vec3,
-    /// Disk radius (> 0).
+    /// Disk radius, in `(0, MAX_COORDINATE]`.
     pub radius: f32,
-    /// Outgoing radiance, RGB, each component ≥ 0.
+    /// Outgoing radiance, RGB, each component in `[0, MAX_RADIANCE]`.
     pub radiance: Vec3,
 }
 
@@ -25,8 +36,13 @@ impl Surfel {
     /// Checks one surfel; `index` only labels the error.
     pub fn validate(&self, index: usize) -> Result<(), Error> {
         let fail = |reason| Err(Error::InvalidSurfel { index, reason });
+        let too_large = |field, value, max| fail(Invalid::TooLarge { field, value, max });
         if !self.position.is_finite() {
             return fail(Invalid::NonFinite { field: "position" });
+        }
+        let far = self.position.abs().max_element();
+        if far > MAX_COORDINATE {
+            return too_large("position", far, MAX_COORDINATE);
         }
         if let Err(reason) = check_normal(self.normal) {
             return fail(reason);
@@ -37,18 +53,24 @@ impl Surfel {
         if self.radius <= 0.0 {
             return fail(Invalid::NonPositiveRadius(self.radius));
         }
+        if self.radius > MAX_COORDINATE {
+            return too_large("radius", self.radius, MAX_COORDINATE);
+        }
         if !self.radiance.is_finite() {
             return fail(Invalid::NonFinite { field: "radiance" });
         }
         if self.radiance.min_element() < 0.0 {
             return fail(Invalid::NegativeRadiance);
         }
+        if self.radiance.max_element() > MAX_RADIANCE {
+            return too_large("radiance", self.radiance.max_element(), MAX_RADIANCE);
+        }
         Ok(())
     }
 
-    /// Area of the disk, `π r²`.
+    /// Area of the disk, `π r²` (saturating at `f32::MAX` for radii beyond about 10¹⁹).
     pub fn area(&self) -> f32 {
-        std::f32::consts::PI * self.radius * self.radius
+        (std::f32::consts::PI * self.radius * self.radius).min(f32::MAX)
     }
 }
 

@@ -386,7 +386,7 @@ impl<'s> Frame<'s> {
             seed: opts.seed,
         };
         let (tree, surfels) = if needs_points {
-            let baked = bake(scene, &tracer, &lights, &bake_opts);
+            let baked = bake(scene, &tracer, &lights, &bake_opts)?;
             stages.push(Stage {
                 name: "surfels + direct light at surfels",
                 skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),

@@ -126,7 +126,7 @@ pub struct NodeView {
     pub cone_cos: f32,
     /// Sine of the cone half-angle.
     pub cone_sin: f32,
-    /// Total surfel area below the node.
+    /// Total surfel area below the node (saturating at `f32::MAX`).
     pub area: f32,
     /// Area-weighted mean normal (not normalized: shorter where normals spread).
     pub normal: Vec3,
@@ -452,7 +452,8 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
         cos,
         sin,
         child: 0,
-        area: pi_area as f32,
+        // Saturates: radii up to `MAX_COORDINATE` can make `π Σ r²` overflow f32.
+        area: (pi_area as f32).min(f32::MAX),
         normal: (normal / area).as_vec3(),
         radiance: (radiance / area).as_vec3(),
         depth: 0,

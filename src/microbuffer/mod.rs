@@ -292,27 +292,31 @@ impl Cone {
     }
 }
 
-/// A leaf's disk in the receiver's frame: normal `m`, centre `c`, `m·c`, radius².
+/// A leaf's disk in the receiver's frame: normal `m`, centre `c`, `m·c`,
+/// radius `r`.
 struct Disk {
     m: Vec3,
     mc: f32,
     c: Vec3,
-    r2: f32,
+    r: f32,
 }
 
 impl Disk {
     /// Whether the ray(s) of direction `u` from the receiver hit the disk's
-    /// front, and at what distance.
+    /// front, at what distance, and the pixel's coverage: the disk's edge is
+    /// a ramp one pixel (angular size `delta`) wide at the hit distance, so a
+    /// disk over a few pixels still shows its true area on average.
     #[inline(always)]
-    fn hit<V: Real>(&self, ux: V, uy: V, uz: V) -> (V::Mask, V) {
+    fn hit<V: Real>(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
         let denom = V::splat(self.m.x) * ux + V::splat(self.m.y) * uy + V::splat(self.m.z) * uz;
         let t = V::splat(self.mc) / denom;
         let ex = ux * t - V::splat(self.c.x);
         let ey = uy * t - V::splat(self.c.y);
         let ez = uz * t - V::splat(self.c.z);
-        let e2 = ex * ex + ey * ey + ez * ez;
+        let e = (ex * ex + ey * ey + ez * ez).sqrt();
         let zero = V::splat(0.0);
-        (denom.lt(zero) & zero.lt(t) & e2.le(V::splat(self.r2)), t)
+        let cover = (V::splat(0.5) + (V::splat(self.r) - e) / (delta * t)).min_of(V::splat(1.0));
+        (denom.lt(zero) & zero.lt(t) & zero.lt(cover), t, cover)
     }
 }
 
@@ -665,7 +669,8 @@ impl MicroBuffer {
         }
     }
 
-    /// Exact disk rasterization of a leaf; false if it covers no pixel centre.
+    /// Disk rasterization of a leaf (ray-disk hits at pixel centres, an
+    /// anti-aliased rim); false if it covers no pixel centre.
     #[inline(always)]
     fn splat_disk(&mut self, node: NodeId, rec: &SplatRecord, spot: &Spot) -> bool {
         let r2 = rec.area * std::f32::consts::FRAC_1_PI * (DISK_INFLATION * DISK_INFLATION);
@@ -675,14 +680,15 @@ impl MicroBuffer {
         let (c0, c1, r0, r1) = if r >= spot.d {
             (0, self.table.n - 1, 0, self.table.n - 1)
         } else {
-            let angle = sine_angle_bound(r / spot.d) + 1e-3;
+            // The edge ramp reaches half a pixel past the rim.
+            let angle = sine_angle_bound(r / spot.d) + 0.5 * self.table.pixel_angle + 1e-3;
             self.table.footprint(spot.x, spot.y, spot.pixel, angle)
         };
         let disk = Disk {
             m,
             mc: m.dot(c),
             c,
-            r2,
+            r,
         };
         let n = self.table.n;
         let mut any_hit = false;
@@ -690,9 +696,9 @@ impl MicroBuffer {
             for col in c0..=c1 {
                 let p = row * n + col;
                 let t = &self.table;
-                let (hit, depth) = disk.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p]);
+                let (hit, depth, cover) = disk.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
                 if hit {
-                    self.write(p, key(depth, node), 1.0, true);
+                    self.write(p, key(depth, node), cover, 0.5 <= cover);
                     any_hit = true;
                 }
             }

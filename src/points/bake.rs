@@ -4,8 +4,9 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::error::Error;
 use crate::light::Lights;
-use crate::points::{PointCloud, Surfel};
+use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
 use crate::scene::Scene;
 use crate::synthetic::Rng;
 use crate::trace::Tracer;
@@ -48,8 +49,42 @@ fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
     Vec2::new(x, y)
 }
 
-/// Samples the surfels of `scene` and lights them directly.
-pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Baked {
+/// Twice the area of a triangle and its unit normal, `None` when degenerate
+/// or overflowing. The normal is normalized in `f64`: the cross product of a
+/// sliver triangle can be subnormal, and its `f32` length too coarse for a
+/// unit normal.
+fn triangle(v: [Vec3; 3]) -> Option<(f32, Vec3)> {
+    let c = (v[1] - v[0]).cross(v[2] - v[0]).as_dvec3();
+    let len = c.length();
+    (len > 0.0 && len.is_finite() && (len as f32).is_finite()).then(|| (len as f32, (c / len).as_vec3()))
+}
+
+/// Samples the surfels of `scene` and lights them directly (`scene` valid,
+/// see [`Scene::validate`]). Errors: a density that is not a finite positive
+/// number, or one that asks for more than [`PointCloud::MAX_SURFELS`] surfels
+/// (counted before anything is allocated).
+pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Result<Baked, Error> {
+    if !(opts.density.is_finite() && opts.density > 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "density",
+            value: opts.density.to_string(),
+            expected: "a finite number > 0 (surfels per unit area)",
+        });
+    }
+    let mut expected = 0.0f64;
+    for m in &scene.meshes {
+        for t in &m.triangles {
+            if let Some((twice_area, _)) = triangle(t.map(|i| m.positions[i as usize])) {
+                expected += (0.5 * twice_area as f64 * opts.density as f64).max(1.0);
+            }
+        }
+    }
+    if expected > PointCloud::MAX_SURFELS as f64 {
+        return Err(Error::TooManySurfels {
+            count: expected.min(usize::MAX as f64) as usize,
+            max: PointCloud::MAX_SURFELS,
+        });
+    }
     // Per triangle, a count from its area (stochastic rounding), stratified
     // with a scrambled Hammersley set mapped area-preservingly to the triangle.
     let mut sites: Vec<(Vec3, Vec3, f32, usize)> = Vec::new();
@@ -57,16 +92,15 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
     for mesh in &scene.meshes {
         for t in &mesh.triangles {
             let v = t.map(|i| mesh.positions[i as usize]);
-            let c = (v[1] - v[0]).cross(v[2] - v[0]);
-            let area = 0.5 * c.length();
-            if !(area > 0.0 && area.is_finite()) {
+            let Some((twice_area, normal)) = triangle(v) else {
                 continue;
-            }
-            let normal = c.normalize();
+            };
+            let area = 0.5 * twice_area;
             let want = area * opts.density;
             let extra = if tri_seed.f32() < want.fract() { 1.0 } else { 0.0 };
             let n = (want.floor() + extra).max(1.0) as u32;
-            let radius = (area / (n as f32 * std::f32::consts::PI)).sqrt();
+            // In f64: the radius of a tiny triangle's disk must not underflow.
+            let radius = (area as f64 / (n as f64 * std::f64::consts::PI)).sqrt() as f32;
             let scramble = tri_seed.next_u64() as u32;
             for i in 0..n {
                 let u = hammersley(i, n, scramble);
@@ -80,7 +114,7 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
     let (surfels, albedo): (Vec<Surfel>, Vec<Vec3>) = sites
         .par_iter()
         .enumerate()
-        .map(|(i, &(position, normal, radius, material))| {
+        .filter_map(|(i, &(position, normal, radius, material))| {
             let albedo = scene.materials[material].albedo;
             let mut rng = Rng::new(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let f = albedo * std::f32::consts::FRAC_1_PI;
@@ -89,17 +123,20 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
             } else {
                 Vec3::ZERO
             };
+            // A Monte Carlo estimate can overflow near a light (and be NaN
+            // then): clamped into the range a surfel accepts.
             let surfel = Surfel {
                 position,
                 normal,
                 radius,
-                radiance: radiance.max(Vec3::ZERO),
+                radiance: radiance.max(Vec3::ZERO).min(Vec3::splat(MAX_RADIANCE)),
             };
-            (surfel, albedo)
+            // Geometry beyond `MAX_COORDINATE` makes no surfel.
+            surfel.validate(i).is_ok().then_some((surfel, albedo))
         })
         .unzip();
-    Baked {
-        cloud: PointCloud::new(surfels).expect("baked surfels are finite with unit normals"),
+    Ok(Baked {
+        cloud: PointCloud::new(surfels).expect("baked surfels are validated one by one"),
         albedo,
-    }
+    })
 }

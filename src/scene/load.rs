@@ -76,7 +76,23 @@ fn parse_err(path: &Path, line: usize, message: impl Into<String>) -> SceneError
     }
 }
 
+/// Only regular files are read: a device (`/dev/zero`, a FIFO) named by a
+/// scene or linked to would be read forever.
+fn regular_file(path: &Path) -> Result<(), SceneError> {
+    let io = |message: String| SceneError::Io {
+        path: path.to_path_buf(),
+        message,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(io("not a regular file".into()))
+    }
+}
+
 fn read_text(path: &Path) -> Result<String, SceneError> {
+    regular_file(path)?;
     std::fs::read_to_string(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -157,6 +173,7 @@ struct PlyElement {
 /// Reads a PLY mesh: vertices x, y, z (and nx, ny, nz), faces as index lists
 /// (fan-triangulated); other properties and elements are skipped.
 pub fn read_ply(path: &Path) -> Result<Mesh, SceneError> {
+    regular_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -399,21 +416,24 @@ impl PlyReader<'_> {
 pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
     // tobj reports no line numbers: check the common faults first, with lines.
     let text = read_text(path)?;
-    let mut vertices = 0i64;
+    // Counts of v, vt and vn lines so far: every face index must refer to one
+    // (tobj's own checks miss some and then index out of bounds).
+    let mut counts = [0i64; 3];
     for (i, line) in text.lines().enumerate() {
         let mut w = line.split_whitespace();
         match w.next() {
-            Some("v") | Some("vn") => {
+            Some(key @ ("v" | "vn" | "vt")) => {
+                let n = if key == "vt" { 2 } else { 3 };
                 let nums: Vec<_> = w.collect();
-                if nums.len() < 3
+                if nums.len() < n
                     || nums
                         .iter()
-                        .take(3)
+                        .take(n)
                         .any(|t| t.parse::<f32>().map_or(true, |x| !x.is_finite()))
                 {
-                    return Err(parse_err(path, i + 1, format!("bad vertex line {line:?}")));
+                    return Err(parse_err(path, i + 1, format!("bad {key} line {line:?}")));
                 }
-                vertices += (line.starts_with("v ") || line.starts_with("v\t")) as i64;
+                counts[["v", "vt", "vn"].iter().position(|k| *k == key).unwrap_or(0)] += 1;
             }
             Some("f") => {
                 let idx: Vec<_> = w.collect();
@@ -421,15 +441,31 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
                     return Err(parse_err(path, i + 1, "a face needs three vertices"));
                 }
                 for t in idx {
-                    let v = t.split('/').next().unwrap_or("").parse::<i64>();
-                    match v {
-                        Ok(k) if (k > 0 && k <= vertices) || (k < 0 && -k <= vertices) => {}
-                        _ => {
-                            return Err(parse_err(
-                                path,
-                                i + 1,
-                                format!("face index {t:?} out of range ({vertices} vertices so far)"),
-                            ));
+                    for (slot, part) in t.split('/').enumerate() {
+                        let (what, count) = match slot {
+                            0 => ("vertex", counts[0]),
+                            1 => ("texture coordinate", counts[1]),
+                            2 => ("normal", counts[2]),
+                            _ => {
+                                return Err(parse_err(
+                                    path,
+                                    i + 1,
+                                    format!("face index {t:?} has too many parts"),
+                                ));
+                            }
+                        };
+                        if slot > 0 && part.is_empty() {
+                            continue; // `v//vn` or `v/vt/`
+                        }
+                        match part.parse::<i64>() {
+                            Ok(k) if (k > 0 && k <= count) || (k < 0 && -k <= count) => {}
+                            _ => {
+                                return Err(parse_err(
+                                    path,
+                                    i + 1,
+                                    format!("face index {t:?}: {what} out of range ({count} so far)"),
+                                ));
+                            }
                         }
                     }
                 }
@@ -442,7 +478,20 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         single_index: true,
         ..Default::default()
     };
-    let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| parse_err(path, 0, e.to_string()))?;
+    // The text already read; material libraries relative to the file, and
+    // regular files only (as tobj's `load_obj` would, but for the check).
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl_path| {
+        let full = dir.join(mtl_path);
+        let Ok(text) = read_text(&full) else {
+            return Err(tobj::LoadError::OpenFileFailed);
+        };
+        if !mtl_is_well_formed(&text) {
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+        tobj::load_mtl_buf(&mut text.as_bytes())
+    })
+    .map_err(|e| parse_err(path, 0, e.to_string()))?;
     let mut warnings = Vec::new();
     let mtl = mtl.unwrap_or_else(|e| {
         warnings.push(format!(
@@ -520,6 +569,18 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         meshes,
         materials,
         warnings,
+    })
+}
+
+/// tobj 4.0.5 panics on a colour line with fewer than three numbers
+/// (`Ks 0.5 0.5`); such a library is refused before it gets there.
+fn mtl_is_well_formed(text: &str) -> bool {
+    text.lines().all(|line| {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("Ka" | "Kd" | "Ks" | "Ke") => w.take(3).filter(|t| t.parse::<f32>().is_ok()).count() == 3,
+            _ => true,
+        }
     })
 }
 

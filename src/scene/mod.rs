@@ -12,6 +12,11 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 
+use crate::points::MAX_RADIANCE;
+
+/// Largest image width and height: a frame's pixel count then fits in `u32`.
+pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
+
 /// A glossy lobe added to the diffuse base (a Phong-like lobe around the
 /// mirror direction, normalized so that `specular` is its albedo at normal
 /// incidence). Roughness is the GGX-style α: 0.05 is shiny, 0.5 is broad.
@@ -234,12 +239,15 @@ impl Scene {
                 ));
             }
             if let Some(e) = m.emission
-                && (!e.is_finite() || e.min_element() < 0.0)
+                && (!e.is_finite() || e.min_element() < 0.0 || e.max_element() > MAX_RADIANCE)
             {
                 return bad(format!(
-                    "mesh {mi} ({}) emission {e} is not finite and ≥ 0",
+                    "mesh {mi} ({}) emission {e} is not in [0, {MAX_RADIANCE:e}]",
                     m.name
                 ));
+            }
+            if let Some(i) = m.normals.iter().flatten().position(|n| !n.is_finite()) {
+                return bad(format!("mesh {mi} ({}) normal {i} is not finite", m.name));
             }
         }
         for m in &self.materials {
@@ -249,12 +257,60 @@ impl Scene {
                     m.name, m.albedo
                 ));
             }
+            if let Some(g) = &m.glossy
+                && !(g.specular.is_finite()
+                    && g.specular.min_element() >= 0.0
+                    && g.specular.max_element() < 1.0
+                    && g.roughness > 0.0
+                    && g.roughness <= 1.0)
+            {
+                return bad(format!(
+                    "material {} glossy lobe {} roughness {} is not in [0, 1) × (0, 1]",
+                    m.name, g.specular, g.roughness
+                ));
+            }
+            if let Some(b) = &m.bump
+                && !(b.amplitude.is_finite() && b.frequency.is_finite())
+            {
+                return bad(format!("material {} bump is not finite", m.name));
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            let ok = match *l {
+                Light::Point { position, intensity } => {
+                    position.is_finite() && intensity.is_finite() && intensity.min_element() >= 0.0
+                }
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => {
+                    direction.is_finite()
+                        && direction.length_squared() > 0.0
+                        && irradiance.is_finite()
+                        && irradiance.min_element() >= 0.0
+                }
+            };
+            if !ok {
+                return bad(format!("light {i} ({l:?}) is not finite and ≥ 0"));
+            }
         }
         let c = &self.camera;
         if c.width == 0 || c.height == 0 || !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
             return bad(format!(
                 "camera {}×{} fov {} is not usable",
                 c.width, c.height, c.fov_degrees
+            ));
+        }
+        if c.width > MAX_IMAGE_SIDE || c.height > MAX_IMAGE_SIDE {
+            return bad(format!(
+                "camera {}×{} is larger than {MAX_IMAGE_SIDE}×{MAX_IMAGE_SIDE}",
+                c.width, c.height
+            ));
+        }
+        if !(c.origin.is_finite() && c.target.is_finite() && c.up.is_finite()) {
+            return bad(format!(
+                "camera origin {} target {} up {} is not finite",
+                c.origin, c.target, c.up
             ));
         }
         if (c.target - c.origin).length_squared() == 0.0

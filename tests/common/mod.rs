@@ -12,7 +12,10 @@
 use std::fmt;
 
 use glam::{DVec3, Vec3};
-use pbgi::{Cut, Isa, NodeId, NodeView, Receiver, Surfel, Tree};
+use pbgi::{
+    Cut, CutOptions, CutRecorder, CutSink, Isa, NodeId, NodeView, Receiver, Scheme, SplatCounter, Surfel,
+    Traversal, Tree,
+};
 use quickcheck::{Arbitrary, Gen, QuickCheck, Testable};
 
 /// Passing cases per property: `PBGI_QC_TESTS`, default 200 (the CI's
@@ -823,6 +826,262 @@ pub fn semantics(
         }
         if t.far == Some(true) {
             return Err(format!("traversed node {k} is clearly far enough to splat"));
+        }
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------
+// Every scheme on every path
+
+/// A sink without discards (the kernels skip that bookkeeping: another code path).
+pub struct SplatsOnly(pub Vec<Vec<NodeId>>);
+
+impl CutSink for SplatsOnly {
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        self.0[receiver].push(node);
+    }
+}
+
+/// The first difference between two cut lists, for messages.
+pub fn first_difference(got: &[Cut], want: &[Cut]) -> Option<String> {
+    if got.len() != want.len() {
+        return Some(format!("{} cuts, expected {}", got.len(), want.len()));
+    }
+    let i = (0..got.len()).find(|&i| got[i] != want[i])?;
+    let diff = |a: &[NodeId], b: &[NodeId]| {
+        a.iter()
+            .filter(|x| !b.contains(x))
+            .take(8)
+            .copied()
+            .collect::<Vec<_>>()
+    };
+    Some(format!(
+        "receiver {i}: splats +{:?} −{:?}, discards +{:?} −{:?}",
+        diff(&got[i].splats, &want[i].splats),
+        diff(&want[i].splats, &got[i].splats),
+        diff(&got[i].discards, &want[i].discards),
+        diff(&want[i].discards, &got[i].discards),
+    ))
+}
+
+pub fn traversal(tree: &Tree, omega: f32, threshold: u32, isa: Isa) -> Result<Traversal<'_>, String> {
+    let t = Traversal::new(
+        tree,
+        CutOptions {
+            max_solid_angle: omega,
+            hybrid_threshold: threshold,
+            isa: Some(isa),
+        },
+    )
+    .map_err(|e| format!("Traversal::new on {isa}: {e}"))?;
+    if t.isa() != isa {
+        return Err(format!("asked for {isa}, runs on {}", t.isa()));
+    }
+    Ok(t)
+}
+
+/// Every scheme on every path against the scalar cut of the first path, through
+/// `cuts`, through `run` (whole slice, stats), with a discard-free sink and
+/// with the splat counter. Returns the scalar cuts.
+pub fn all_paths_agree(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    threshold: u32,
+) -> Result<Vec<Cut>, String> {
+    let mut reference: Option<Vec<Cut>> = None;
+    for isa in Isa::available() {
+        let t = traversal(tree, omega, threshold, isa)?;
+        let scalar = t.cuts(Scheme::Scalar, receivers);
+        if let Some(r) = &reference
+            && let Some(d) = first_difference(&scalar, r)
+        {
+            return Err(format!("scalar on {isa} differs from the first path at {d}"));
+        }
+        for scheme in [Scheme::Single, Scheme::Packet, Scheme::Hybrid] {
+            if let Some(d) = first_difference(&t.cuts(scheme, receivers), &scalar) {
+                return Err(format!("{scheme} on {isa} (cuts) differs from scalar at {d}"));
+            }
+        }
+
+        // The counters: every scheme tests the same (receiver, node) pairs,
+        // the cut nodes and their strict ancestors (2|C| − 1 in a full binary tree).
+        let expected_tests: u64 = if tree.is_empty() {
+            0
+        } else {
+            scalar
+                .iter()
+                .map(|c| 2 * (c.splats.len() + c.discards.len()) as u64 - 1)
+                .sum()
+        };
+        let total_splats: u64 = scalar.iter().map(|c| c.splats.len() as u64).sum();
+        for scheme in Scheme::ALL {
+            let mut rec = CutRecorder::new(receivers.len());
+            let stats = t.run(scheme, receivers, &mut rec);
+            if let Some(d) = first_difference(&rec.into_cuts(), &scalar) {
+                return Err(format!("{scheme} on {isa} (run) differs from scalar at {d}"));
+            }
+            let fail = |what: &str| Err(format!("{scheme} on {isa}: {what}: {stats:?}"));
+            if stats.receivers != receivers.len() as u64 {
+                return fail("receiver count");
+            }
+            if stats.node_tests != expected_tests {
+                return fail(&format!("node tests, expected {expected_tests}"));
+            }
+            match scheme {
+                Scheme::Scalar if stats.lane_slots != 0 || stats.active_lanes != 0 => return fail("lanes"),
+                Scheme::Scalar => {}
+                _ if stats.lane_slots % 16 != 0 || stats.active_lanes != stats.node_tests => {
+                    return fail("lanes");
+                }
+                _ => {}
+            }
+            let chunks = receivers.len().div_ceil(16) as u64;
+            let switches_ok = match (scheme, threshold) {
+                (Scheme::Hybrid, 0 | 1) => stats.switches == 0,
+                (Scheme::Hybrid, 17) => stats.switches == if tree.is_empty() { 0 } else { chunks },
+                (Scheme::Hybrid, _) => true,
+                _ => stats.switches == 0,
+            };
+            if !switches_ok {
+                return fail(&format!("switches with threshold {threshold}"));
+            }
+
+            let mut only = SplatsOnly(vec![Vec::new(); receivers.len()]);
+            t.run(scheme, receivers, &mut only);
+            for (i, mut s) in only.0.into_iter().enumerate() {
+                s.sort_unstable();
+                if s != scalar[i].splats {
+                    return Err(format!(
+                        "{scheme} on {isa} without discards: receiver {i} splats {s:?}, scalar {:?}",
+                        scalar[i].splats
+                    ));
+                }
+            }
+            let mut count = SplatCounter::default();
+            t.run(scheme, receivers, &mut count);
+            if count.splats != total_splats {
+                return Err(format!(
+                    "{scheme} on {isa}: splat counter {} vs {total_splats}",
+                    count.splats
+                ));
+            }
+        }
+        reference.get_or_insert(scalar);
+    }
+    Ok(reference.unwrap_or_default())
+}
+
+// ---------------------------------------------------------------------------
+// Shading
+
+/// Irradiance and ambient occlusion at each receiver: the cut of `scheme` on
+/// `isa` splatted into microbuffers of resolution `res`.
+pub fn shade(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+    scheme: Scheme,
+    isa: Isa,
+) -> Result<Vec<(Vec3, f32)>, String> {
+    use pbgi::microbuffer::{MicroBuffer, MicroBufferSink};
+    let t = traversal(tree, omega, 2, isa)?;
+    let proto = MicroBuffer::new(res).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(receivers.len());
+    for chunk in receivers.chunks(LANES_PER_CHUNK) {
+        let mut buffers = vec![proto.clone(); chunk.len()];
+        for (b, r) in buffers.iter_mut().zip(chunk) {
+            b.reset(r.position(), r.normal());
+        }
+        t.run(
+            scheme,
+            chunk,
+            &mut MicroBufferSink {
+                tree,
+                buffers: &mut buffers,
+            },
+        );
+        out.extend(buffers.iter().map(|b| (b.irradiance(tree), b.occlusion())));
+    }
+    Ok(out)
+}
+
+/// Receivers per microbuffer batch in [`shade`] (two packets).
+const LANES_PER_CHUNK: usize = 32;
+
+/// [`shade`] with every scheme on every path this CPU runs: all must give the
+/// scalar result of the portable path bit for bit (DESIGN §4). Returns it.
+pub fn shade_everywhere(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+) -> Result<Vec<(Vec3, f32)>, String> {
+    let reference = shade(tree, receivers, omega, res, Scheme::Scalar, Isa::Portable)?;
+    let bits = |v: &[(Vec3, f32)]| -> Vec<u32> {
+        v.iter()
+            .flat_map(|(e, ao)| [e.x, e.y, e.z, *ao].map(f32::to_bits))
+            .collect()
+    };
+    let want = bits(&reference);
+    for isa in Isa::available() {
+        for scheme in Scheme::ALL {
+            let got = shade(tree, receivers, omega, res, scheme, isa)?;
+            if bits(&got) != want {
+                let i = (0..got.len())
+                    .find(|&i| bits(&got[i..=i]) != bits(&reference[i..=i]))
+                    .unwrap_or(0);
+                return Err(format!(
+                    "{scheme} on {isa}, Ω {omega:e}, N {res}: receiver {i} shades {:?}, scalar on portable {:?}",
+                    got[i], reference[i]
+                ));
+            }
+        }
+    }
+    Ok(reference)
+}
+
+/// The energy bounds: irradiance finite, ≥ 0 and at most `π · max L` per
+/// channel (coverage ≤ 1 per pixel and `Σ ∫cosθ dω = π`; the slack is f32
+/// rounding of the pixel sums: relative, and absolute for subnormal radiance,
+/// where each term rounds by up to 2⁻¹⁴⁹), ambient occlusion in [0, 1].
+pub fn check_bounded(shading: &[(Vec3, f32)], max_radiance: Vec3) -> Result<(), String> {
+    let bound = max_radiance * std::f32::consts::PI * 1.0001 + Vec3::splat(f32::MIN_POSITIVE);
+    for (i, &(e, ao)) in shading.iter().enumerate() {
+        if !(e.is_finite() && e.min_element() >= 0.0) {
+            return Err(format!("receiver {i}: irradiance {e} is not finite and ≥ 0"));
+        }
+        if e.cmpgt(bound).any() {
+            return Err(format!("receiver {i}: irradiance {e} above π·max L = {bound}"));
+        }
+        if !(0.0..=1.0).contains(&ao) {
+            return Err(format!("receiver {i}: occlusion {ao} outside [0, 1]"));
+        }
+    }
+    Ok(())
+}
+
+/// Largest radiance per channel of a cloud.
+pub fn max_radiance(surfels: &[Surfel]) -> Vec3 {
+    surfels.iter().fold(Vec3::ZERO, |m, s| m.max(s.radiance))
+}
+
+/// Every field of every node is finite (nothing non-finite leaves the tree).
+pub fn tree_is_finite(tree: &Tree) -> Result<(), String> {
+    for k in 0..tree.len() as NodeId {
+        let v = tree.node(k);
+        let ok = v.center.is_finite()
+            && v.radius.is_finite()
+            && v.cone_axis.is_finite()
+            && v.cone_cos.is_finite()
+            && v.cone_sin.is_finite()
+            && v.area.is_finite()
+            && v.normal.is_finite()
+            && v.radiance.is_finite();
+        if !ok {
+            return Err(format!("node {k} is not finite: {v:?}"));
         }
     }
     Ok(())
