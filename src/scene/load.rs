@@ -400,9 +400,17 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
     // tobj reports no line numbers: check the common faults first, with lines.
     let text = read_text(path)?;
     let mut vertices = 0i64;
+    // Material names in order of first use, for an OBJ whose MTL is missing.
+    let mut used_materials: Vec<String> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut w = line.split_whitespace();
         match w.next() {
+            Some("usemtl") => {
+                let name = line.trim_start()["usemtl".len()..].trim();
+                if !name.is_empty() && !used_materials.iter().any(|m| m == name) {
+                    used_materials.push(name.to_string());
+                }
+            }
             Some("v") | Some("vn") => {
                 let nums: Vec<_> = w.collect();
                 if nums.len() < 3
@@ -442,8 +450,45 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         single_index: true,
         ..Default::default()
     };
-    let (models, mtl) = tobj::load_obj(path, &opts).map_err(|e| parse_err(path, 0, e.to_string()))?;
-    let mut warnings = Vec::new();
+    // A missing or unreadable MTL is not an error: the materials `usemtl` names
+    // get the default grey (and keep their names, so meshes stay apart by material).
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mtl_problems = std::cell::RefCell::new(Vec::<String>::new());
+    let load_mtl = |p: &Path| -> tobj::MTLLoadResult {
+        let file = dir.join(p);
+        match tobj::load_mtl(&file) {
+            Ok(r) => Ok(r),
+            Err(e) => {
+                let mut problems = mtl_problems.borrow_mut();
+                let first = problems.is_empty();
+                problems.push(format!("{} ({e})", file.display()));
+                let names = if first { &used_materials[..] } else { &[] };
+                let stand_ins = names
+                    .iter()
+                    .map(|name| tobj::Material {
+                        name: name.clone(),
+                        diffuse: Some([MISSING_MTL_GREY; 3]),
+                        ..Default::default()
+                    })
+                    .collect();
+                let map = names.iter().enumerate().map(|(k, n)| (n.clone(), k)).collect();
+                Ok((stand_ins, map))
+            }
+        }
+    };
+    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, load_mtl)
+        .map_err(|e| parse_err(path, 0, e.to_string()))?;
+    let mut warnings: Vec<String> = mtl_problems
+        .into_inner()
+        .into_iter()
+        .map(|file| {
+            format!(
+                "{}: material library {file} not read: the {} material(s) named by usemtl get the default grey {MISSING_MTL_GREY}",
+                path.display(),
+                used_materials.len()
+            )
+        })
+        .collect();
     let mtl = mtl.unwrap_or_else(|e| {
         warnings.push(format!(
             "{}: materials not read ({e}), default grey used",
@@ -522,6 +567,9 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         warnings,
     })
 }
+
+/// Albedo of the materials an OBJ names by `usemtl` when its MTL file is missing.
+pub const MISSING_MTL_GREY: f32 = 0.5;
 
 /// What an OBJ file holds.
 pub struct ObjFile {
