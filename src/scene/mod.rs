@@ -1,11 +1,13 @@
 //! Scenes: triangle meshes with materials, emitters and a perspective camera.
 //!
-//! Built-in scenes need no files ([`builtin`]); files are read by the loaders
+//! Built-in scenes need no files ([`builtin`], among them the procedural
+//! [`nave`]); files are read by the loaders
 //! behind the `formats` feature (Mitsuba 3 XML, OBJ + MTL, PLY).
 
 pub mod builtin;
 #[cfg(feature = "formats")]
 pub mod load;
+pub mod nave;
 
 use std::fmt;
 use std::path::PathBuf;
