@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
-use super::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, builtin};
+use super::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, builtin, fetched};
 
 /// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -57,14 +57,33 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
     Ok(scene)
 }
 
-/// A built-in scene by name, else a file by path.
+/// A built-in scene by name, else a fetched scene by name (from the scene
+/// folder, [`fetched::scene_dir`]), else a file by path.
 pub fn resolve(name_or_path: &str) -> Result<Scene, SceneError> {
-    match builtin::scene(name_or_path) {
-        Ok(s) => Ok(s),
-        Err(e) => {
-            let p = Path::new(name_or_path);
-            if p.exists() { load(p) } else { Err(e) }
-        }
+    resolve_in(name_or_path, &fetched::scene_dir())
+}
+
+/// As [`resolve`], with fetched scenes read from `scene_dir`. A fetched
+/// scene's name with its file missing is [`SceneError::MissingSceneData`].
+pub fn resolve_in(name_or_path: &str, scene_dir: &Path) -> Result<Scene, SceneError> {
+    if builtin::NAMES.contains(&name_or_path) {
+        return builtin::scene(name_or_path);
+    }
+    if fetched::files(name_or_path).is_some() {
+        return fetched::scene_in(name_or_path, scene_dir);
+    }
+    let p = Path::new(name_or_path);
+    if p.exists() {
+        load(p)
+    } else {
+        Err(SceneError::UnknownScene {
+            name: name_or_path.to_string(),
+            builtins: builtin::NAMES
+                .iter()
+                .chain(fetched::NAMES.iter())
+                .copied()
+                .collect(),
+        })
     }
 }
 
