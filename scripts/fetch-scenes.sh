@@ -74,6 +74,7 @@ deb_extract() {
     deb=$(ls "$tmp/$pkg"/*.deb 2>/dev/null | head -n 1)
     [[ -n $deb ]] || fail "apt-get download $pkg left no .deb"
     echo "  downloaded $(basename "$deb") from the Debian archive"
+    deb_name=$(basename "$deb")
     dpkg-deb -x "$deb" "$tmp/$pkg/root" || fail "dpkg-deb could not unpack $deb"
 }
 
@@ -92,7 +93,8 @@ else
     mkdir -p "$dest/bunny"
     cp "$src" "$dest/bunny/bunny.obj.part" && mv "$dest/bunny/bunny.obj.part" "$dest/bunny/bunny.obj"
     copyright=$tmp/glmark2-data/root/usr/share/doc/glmark2-data/copyright
-    [[ -f $copyright ]] && cp "$copyright" "$dest/bunny/copyright-glmark2-data"
+    if [[ -f $copyright ]]; then cp "$copyright" "$dest/bunny/copyright-glmark2-data"; fi
+    echo "bunny.obj: /usr/share/glmark2/models/bunny.obj of Debian package $deb_name (GPL-3+)" >"$dest/bunny/SOURCE"
     fetched+=("bunny -> $dest/bunny/bunny.obj")
 fi
 
@@ -130,6 +132,8 @@ EOF
     check_obj "$src" 60000 75000 3000000
     mkdir -p "$dest/sponza"
     cp "$src" "$dest/sponza/sponza.obj.part" && mv "$dest/sponza/sponza.obj.part" "$dest/sponza/sponza.obj"
+    if [[ -f $(dirname "$manifest")/LICENSE ]]; then cp "$(dirname "$manifest")/LICENSE" "$dest/sponza/LICENSE-bvh-crate"; fi
+    echo "sponza.obj: media/sponza.obj of crate bvh 0.13.0 from crates.io (crate MIT; model by Marko Dabrovic)" >"$dest/sponza/SOURCE"
     fetched+=("sponza -> $dest/sponza/sponza.obj")
 fi
 
@@ -152,6 +156,7 @@ if ((optional)); then
         cp "$doc/cornell_box.mtl" "$dest/cornell-box-embree/cornell_box.mtl"
         cp "$doc/cornell_box.obj" "$dest/cornell-box-embree/cornell_box.obj.part"
         mv "$dest/cornell-box-embree/cornell_box.obj.part" "$dest/cornell-box-embree/cornell_box.obj"
+        echo "cornell_box.obj + .mtl: examples/ of Debian package $deb_name (from Embree, Apache-2.0)" >"$dest/cornell-box-embree/SOURCE"
         fetched+=("cornell-box-embree -> $dest/cornell-box-embree/cornell_box.obj")
     fi
 fi
