@@ -815,7 +815,10 @@ fn fuzz_regressions() {
         if name == "scene_parsers-mtl-ks-two-numbers" {
             let scene = r.unwrap().unwrap();
             assert!(
-                scene.warnings.iter().any(|w| w.contains("materials not read")),
+                scene
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains("material library not read")),
                 "{:?}",
                 scene.warnings
             );

@@ -23,7 +23,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene (a built-in name or a Mitsuba XML / OBJ / PLY file).
+    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY file).
     Render(RenderArgs),
     /// Render the ground truth with the path tracer (same scene, camera, bounces).
     Reference(ReferenceArgs),
@@ -31,6 +31,8 @@ enum Command {
     Bench(BenchArgs),
     /// Error against run time: sweeps Ω, microbuffer and schemes against a path-traced reference.
     Report(ReportArgs),
+    /// List the scene names: built-in, and fetched ones with whether their files are present.
+    Scenes,
 }
 
 #[derive(Args, Clone)]
@@ -144,10 +146,14 @@ fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
     names.iter().map(|n| Ok(n.trim().parse::<Scheme>()?)).collect()
 }
 
+/// SCENE's help: the names (see `pbgi scenes` for which are present).
+const SCENE_HELP: &str = "Scene: built-in cornell-box, cornell-box-glossy, nave (procedural, stands in for Sibenik); \
+after scripts/fetch-scenes.sh also bunny, bunny-glossy, sponza, sponza-bump, cornell-box-embree \
+(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY file";
+
 #[derive(Args, Clone)]
 struct ReferenceArgs {
-    /// Built-in scene or scene file.
-    #[arg(default_value = "cornell-box")]
+    #[arg(default_value = "cornell-box", help = SCENE_HELP)]
     scene: String,
     /// Output image (.exr keeps linear radiance; .png is tonemapped). Default: SCENE-reference.exr.
     #[arg(short, long)]
@@ -165,8 +171,7 @@ struct ReferenceArgs {
 
 #[derive(Args, Clone)]
 struct RenderArgs {
-    /// Built-in scene (cornell-box, cornell-box-glossy) or scene file.
-    #[arg(default_value = "cornell-box")]
+    #[arg(default_value = "cornell-box", help = SCENE_HELP)]
     scene: String,
     /// Output image: .png (tonemapped sRGB) or .exr (linear radiance). Default: SCENE.png.
     #[arg(short, long)]
@@ -219,6 +224,7 @@ fn main() -> ExitCode {
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Report(args)) => cmd_report(&args),
+        Some(Command::Scenes) => cmd_scenes(),
         None => cmd_render(&RenderArgs::default()),
     };
     match result {
@@ -316,6 +322,30 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
     println!("wrote {}", out_path.display());
+    Ok(())
+}
+
+fn cmd_scenes() -> Res<()> {
+    use pbgi::scene::{builtin, fetched};
+    for name in builtin::NAMES {
+        println!("{name:<20} built-in");
+    }
+    let dir = fetched::scene_dir();
+    for name in fetched::NAMES {
+        let files = fetched::files(name).unwrap_or_default();
+        if fetched::is_present_in(name, &dir) {
+            println!("{name:<20} fetched: {}", dir.join(files[0]).display());
+        } else {
+            println!(
+                "{name:<20} missing: {} (run scripts/fetch-scenes.sh)",
+                files
+                    .iter()
+                    .map(|f| dir.join(f).display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
     Ok(())
 }
 

@@ -4,14 +4,15 @@
 //! `cbox.xml` + PLY (Mitsuba 3 is BSD-licensed): same geometry, reflectances,
 //! light radiance and camera, 256×256. `cornell-box-glossy` is the same box
 //! with a glossy floor, a bump-mapped back wall and a glossy tall block: the
-//! high-frequency case where packets lose coherence.
+//! high-frequency case where packets lose coherence. `nave` is the procedural
+//! church interior of [`super::nave`], standing in for Sibenik.
 
 use glam::Vec3;
 
 use super::{Bump, Camera, FovAxis, Glossy, Material, Mesh, Scene, SceneError};
 
 /// Names of the built-in scenes.
-pub const NAMES: [&str; 2] = ["cornell-box", "cornell-box-glossy"];
+pub const NAMES: [&str; 3] = ["cornell-box", "cornell-box-glossy", "nave"];
 
 const WHITE: usize = 0;
 const GREEN: usize = 1;
@@ -59,6 +60,7 @@ pub fn scene(name: &str) -> Result<Scene, SceneError> {
     match name {
         "cornell-box" => Ok(cornell_box()),
         "cornell-box-glossy" => Ok(cornell_box_glossy()),
+        "nave" => Ok(super::nave::nave()),
         _ => Err(SceneError::UnknownScene {
             name: name.to_string(),
             builtins: NAMES.to_vec(),

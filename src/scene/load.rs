@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
-use super::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, builtin};
+use super::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, builtin, fetched};
 
 /// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -57,14 +57,33 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
     Ok(scene)
 }
 
-/// A built-in scene by name, else a file by path.
+/// A built-in scene by name, else a fetched scene by name (from the scene
+/// folder, [`fetched::scene_dir`]), else a file by path.
 pub fn resolve(name_or_path: &str) -> Result<Scene, SceneError> {
-    match builtin::scene(name_or_path) {
-        Ok(s) => Ok(s),
-        Err(e) => {
-            let p = Path::new(name_or_path);
-            if p.exists() { load(p) } else { Err(e) }
-        }
+    resolve_in(name_or_path, &fetched::scene_dir())
+}
+
+/// As [`resolve`], with fetched scenes read from `scene_dir`. A fetched
+/// scene's name with its file missing is [`SceneError::MissingSceneData`].
+pub fn resolve_in(name_or_path: &str, scene_dir: &Path) -> Result<Scene, SceneError> {
+    if builtin::NAMES.contains(&name_or_path) {
+        return builtin::scene(name_or_path);
+    }
+    if fetched::files(name_or_path).is_some() {
+        return fetched::scene_in(name_or_path, scene_dir);
+    }
+    let p = Path::new(name_or_path);
+    if p.exists() {
+        load(p)
+    } else {
+        Err(SceneError::UnknownScene {
+            name: name_or_path.to_string(),
+            builtins: builtin::NAMES
+                .iter()
+                .chain(fetched::NAMES.iter())
+                .copied()
+                .collect(),
+        })
     }
 }
 
@@ -419,9 +438,17 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
     // Counts of v, vt and vn lines so far: every face index must refer to one
     // (tobj's own checks miss some and then index out of bounds).
     let mut counts = [0i64; 3];
+    // Material names in order of first use, for an OBJ whose MTL is missing.
+    let mut used_materials: Vec<String> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let mut w = line.split_whitespace();
         match w.next() {
+            Some("usemtl") => {
+                let name = line.trim_start()["usemtl".len()..].trim();
+                if !name.is_empty() && !used_materials.iter().any(|m| m == name) {
+                    used_materials.push(name.to_string());
+                }
+            }
             Some(key @ ("v" | "vn" | "vt")) => {
                 let n = if key == "vt" { 2 } else { 3 };
                 let nums: Vec<_> = w.collect();
@@ -478,21 +505,48 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         single_index: true,
         ..Default::default()
     };
-    // The text already read; material libraries relative to the file, and
-    // regular files only (as tobj's `load_obj` would, but for the check).
+    // The text already read; material libraries relative to the file,
+    // regular files only, and refused when tobj would panic on them. A
+    // missing, unreadable or refused MTL is not an error: the materials
+    // `usemtl` names get the default grey (and keep their names, so meshes
+    // stay apart by material).
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl_path| {
-        let full = dir.join(mtl_path);
-        let Ok(text) = read_text(&full) else {
-            return Err(tobj::LoadError::OpenFileFailed);
+    let mtl_problems = std::cell::RefCell::new(Vec::<String>::new());
+    let load_mtl = |p: &Path| -> tobj::MTLLoadResult {
+        let file = dir.join(p);
+        let problem = match read_text(&file) {
+            Ok(text) if mtl_is_well_formed(&text) => return tobj::load_mtl_buf(&mut text.as_bytes()),
+            Ok(_) => format!("{}: a colour with fewer than three numbers", file.display()),
+            Err(e) => e.to_string(),
         };
-        if !mtl_is_well_formed(&text) {
-            return Err(tobj::LoadError::MaterialParseError);
-        }
-        tobj::load_mtl_buf(&mut text.as_bytes())
-    })
-    .map_err(|e| parse_err(path, 0, e.to_string()))?;
-    let mut warnings = Vec::new();
+        let mut problems = mtl_problems.borrow_mut();
+        let first = problems.is_empty();
+        problems.push(problem);
+        let names = if first { &used_materials[..] } else { &[] };
+        let stand_ins = names
+            .iter()
+            .map(|name| tobj::Material {
+                name: name.clone(),
+                diffuse: Some([MISSING_MTL_GREY; 3]),
+                ..Default::default()
+            })
+            .collect();
+        let map = names.iter().enumerate().map(|(k, n)| (n.clone(), k)).collect();
+        Ok((stand_ins, map))
+    };
+    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, load_mtl)
+        .map_err(|e| parse_err(path, 0, e.to_string()))?;
+    let mut warnings: Vec<String> = mtl_problems
+        .into_inner()
+        .into_iter()
+        .map(|problem| {
+            format!(
+                "{}: material library not read ({problem}): the {} material(s) named by usemtl get the default grey {MISSING_MTL_GREY}",
+                path.display(),
+                used_materials.len()
+            )
+        })
+        .collect();
     let mtl = mtl.unwrap_or_else(|e| {
         warnings.push(format!(
             "{}: materials not read ({e}), default grey used",
@@ -583,6 +637,9 @@ fn mtl_is_well_formed(text: &str) -> bool {
         }
     })
 }
+
+/// Albedo of the materials an OBJ names by `usemtl` when its MTL file is missing.
+pub const MISSING_MTL_GREY: f32 = 0.5;
 
 /// What an OBJ file holds.
 pub struct ObjFile {

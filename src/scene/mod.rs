@@ -1,11 +1,18 @@
 //! Scenes: triangle meshes with materials, emitters and a perspective camera.
 //!
-//! Built-in scenes need no files ([`builtin`]); files are read by the loaders
-//! behind the `formats` feature (Mitsuba 3 XML, OBJ + MTL, PLY).
+//! Built-in scenes need no files ([`builtin`], among them the procedural
+//! [`nave`]); files are read by the loaders behind the `formats` feature
+//! (Mitsuba 3 XML, OBJ + MTL, PLY). The classic test scenes (Stanford bunny,
+//! Dabrovic Sponza) are fetched from package registries by
+//! `scripts/fetch-scenes.sh` and loaded by name through `fetched` (also behind
+//! `formats`); [`available_scenes`] lists the names usable now.
 
 pub mod builtin;
 #[cfg(feature = "formats")]
+pub mod fetched;
+#[cfg(feature = "formats")]
 pub mod load;
+pub mod nave;
 
 use std::fmt;
 use std::path::PathBuf;
@@ -360,8 +367,16 @@ pub enum SceneError {
     UnknownScene {
         /// The name given.
         name: String,
-        /// The built-in names.
+        /// The scene names known: built-in, then those `scripts/fetch-scenes.sh` provides.
         builtins: Vec<&'static str>,
+    },
+    /// A scene fetched by `scripts/fetch-scenes.sh` was asked for by name, but
+    /// its file is not there.
+    MissingSceneData {
+        /// The scene name.
+        scene: String,
+        /// The file it needs.
+        file: PathBuf,
     },
 }
 
@@ -376,11 +391,35 @@ impl fmt::Display for SceneError {
             SceneError::Invalid { what } => write!(f, "invalid scene: {what}"),
             SceneError::UnknownScene { name, builtins } => write!(
                 f,
-                "no built-in scene or file named {name:?} (built-in: {})",
+                "no scene or file named {name:?} (scenes: {})",
                 builtins.join(", ")
+            ),
+            SceneError::MissingSceneData { scene, file } => write!(
+                f,
+                "scene {scene:?} needs {}, which is missing: run scripts/fetch-scenes.sh \
+                 (it fetches into $PBGI_SCENE_DIR, default scenes/ in the repository)",
+                file.display()
             ),
         }
     }
 }
 
 impl std::error::Error for SceneError {}
+
+/// Names of the scenes usable now: the built-in ones always, the fetched ones
+/// (see `scripts/fetch-scenes.sh`) when their files are in the scene folder
+/// (`PBGI_SCENE_DIR`, else `scenes/` in the repository).
+pub fn available_scenes() -> Vec<String> {
+    #[cfg(feature = "formats")]
+    return available_scenes_in(&fetched::scene_dir());
+    #[cfg(not(feature = "formats"))]
+    builtin::NAMES.iter().map(|s| s.to_string()).collect()
+}
+
+/// As [`available_scenes`], with fetched scenes looked for in `dir`.
+#[cfg(feature = "formats")]
+pub fn available_scenes_in(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = builtin::NAMES.iter().map(|s| s.to_string()).collect();
+    names.extend(fetched::available_in(dir));
+    names
+}

@@ -1,0 +1,285 @@
+//! Named scenes: every built-in one (the procedural nave included) validates
+//! and renders; the fetched ones (bunny, Sponza, Embree's box) are checked when
+//! `scripts/fetch-scenes.sh` has put them in the scene folder and skipped, with
+//! the reason printed, when not; a fetched scene whose file is missing is
+//! always a typed error naming the file and the script.
+#![cfg(feature = "formats")]
+
+use std::path::PathBuf;
+
+use pbgi::render::{RenderOptions, render};
+use pbgi::scene::load::{read_obj, resolve_in};
+use pbgi::scene::{Light, Scene, SceneError, available_scenes_in, builtin, fetched, nave};
+
+/// A tiny, quick render: no NaN, not black.
+fn renders(mut scene: Scene, density: f32) {
+    scene.validate().unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+    let aspect = scene.camera.height as f32 / scene.camera.width as f32;
+    scene.camera.width = 24;
+    scene.camera.height = ((24.0 * aspect) as u32).max(8);
+    let opts = RenderOptions {
+        spp: 1,
+        density,
+        ..Default::default()
+    };
+    let out = render(&scene, &opts, &|_, _| {}).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+    let px = &out.image.pixels;
+    assert!(
+        px.iter().all(|p| p.is_finite() && p.min_element() >= 0.0),
+        "{}: a pixel is not finite and ≥ 0",
+        scene.name
+    );
+    let mean = px.iter().map(|p| p.element_sum() / 3.0).sum::<f32>() / px.len() as f32;
+    assert!(mean > 0.01, "{}: mean {mean} is black", scene.name);
+    assert!(out.surfels > 0, "{}: no surfels", scene.name);
+    eprintln!("{}: mean radiance {mean:.3}, {} surfels", scene.name, out.surfels);
+}
+
+#[test]
+fn every_builtin_validates_and_renders() {
+    for name in builtin::NAMES {
+        let scene = builtin::scene(name).unwrap();
+        assert_eq!(scene.name, name);
+        renders(scene, 300.0);
+    }
+}
+
+#[test]
+fn the_nave_is_a_moderate_lit_interior() {
+    let s = nave::nave();
+    let tris = s.triangle_count();
+    assert!((1000..10_000).contains(&tris), "{tris} triangles");
+    assert!(s.meshes.iter().any(|m| m.emission.is_some()), "no area light");
+    assert!(
+        s.lights.iter().any(|l| matches!(l, Light::Directional { .. })),
+        "no sun"
+    );
+    // The camera stands inside the building's bounds.
+    let (mut lo, mut hi) = (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY);
+    for p in s.meshes.iter().flat_map(|m| &m.positions) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let c = s.camera.origin;
+    assert!(
+        c.cmpgt(lo).all() && c.cmplt(hi).all(),
+        "camera {c} outside {lo}..{hi}"
+    );
+    // No triangle is degenerate.
+    for m in &s.meshes {
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!(
+                (b - a).cross(c - a).length() > 1e-7,
+                "{}: degenerate triangle",
+                m.name
+            );
+        }
+    }
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pbgi-scenes-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn a_missing_fetched_scene_names_the_file_and_the_script() {
+    let empty = temp_dir("empty");
+    for name in fetched::NAMES {
+        for e in [
+            fetched::scene_in(name, &empty).unwrap_err(),
+            resolve_in(name, &empty).unwrap_err(),
+        ] {
+            let SceneError::MissingSceneData { scene, file } = &e else {
+                panic!("{name}: expected MissingSceneData, got {e}");
+            };
+            assert_eq!(scene, name);
+            assert!(file.starts_with(&empty), "{}", file.display());
+            let first = fetched::files(name).unwrap()[0];
+            assert!(file.ends_with(first), "{}", file.display());
+            let text = e.to_string();
+            assert!(text.contains("scripts/fetch-scenes.sh"), "{text}");
+            assert!(text.contains(&file.display().to_string()), "{text}");
+        }
+    }
+    // Only the built-in scenes are available from an empty folder.
+    assert_eq!(
+        available_scenes_in(&empty),
+        builtin::NAMES.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    );
+    // Built-in names never look at the folder; unknown names list every name.
+    assert!(resolve_in("nave", &empty).is_ok());
+    match resolve_in("no-such-scene", &empty).unwrap_err() {
+        SceneError::UnknownScene { builtins, .. } => {
+            assert!(builtins.contains(&"nave") && builtins.contains(&"sponza"))
+        }
+        e => panic!("expected UnknownScene, got {e}"),
+    }
+}
+
+#[test]
+fn a_half_fetched_scene_names_the_missing_file() {
+    // Embree's box needs its .mtl too.
+    let dir = temp_dir("half");
+    let sub = dir.join("cornell-box-embree");
+    std::fs::create_dir_all(&sub).unwrap();
+    std::fs::write(
+        sub.join("cornell_box.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    assert!(!fetched::is_present_in("cornell-box-embree", &dir));
+    match fetched::scene_in("cornell-box-embree", &dir).unwrap_err() {
+        SceneError::MissingSceneData { file, .. } => assert!(file.ends_with("cornell_box.mtl")),
+        e => panic!("expected MissingSceneData, got {e}"),
+    }
+}
+
+#[test]
+fn a_broken_fetched_file_is_a_typed_error_with_its_line() {
+    let dir = temp_dir("broken");
+    std::fs::create_dir_all(dir.join("sponza")).unwrap();
+    std::fs::write(
+        dir.join("sponza/sponza.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 99\n",
+    )
+    .unwrap();
+    match fetched::scene_in("sponza", &dir).unwrap_err() {
+        SceneError::Parse { path, line, .. } => {
+            assert!(path.ends_with("sponza/sponza.obj"));
+            assert_eq!(line, 5);
+        }
+        e => panic!("expected a parse error, got {e}"),
+    }
+}
+
+#[test]
+fn an_obj_without_its_mtl_keeps_its_material_names_with_a_warning() {
+    let dir = temp_dir("nomtl");
+    let p = dir.join("groups.obj");
+    std::fs::write(
+        &p,
+        "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl stone\nf 1 2 3\nusemtl wood\nf 2 4 3\n",
+    )
+    .unwrap();
+    let obj = read_obj(&p).unwrap();
+    let names: Vec<&str> = obj.materials.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["stone", "wood", "default"]);
+    assert_eq!(obj.meshes.len(), 2, "one mesh per material");
+    assert_eq!(obj.meshes[0].material, 0);
+    assert_eq!(obj.meshes[1].material, 1);
+    assert!(
+        obj.warnings.iter().any(|w| w.contains("gone.mtl")),
+        "{:?}",
+        obj.warnings
+    );
+    assert!(
+        obj.materials
+            .iter()
+            .all(|m| m.albedo == glam::Vec3::splat(pbgi::scene::load::MISSING_MTL_GREY))
+    );
+}
+
+/// The fetched scene `name` from the scene folder, or `None` with the reason printed.
+fn fetched_or_skip(name: &str) -> Option<Scene> {
+    let dir = fetched::scene_dir();
+    if !fetched::is_present_in(name, &dir) {
+        eprintln!(
+            "skipped {name}: its files are not in {} (run scripts/fetch-scenes.sh)",
+            dir.display()
+        );
+        return None;
+    }
+    Some(fetched::scene_in(name, &dir).unwrap_or_else(|e| panic!("{name}: {e}")))
+}
+
+#[test]
+fn fetched_scenes_load_and_render_when_present() {
+    for name in fetched::NAMES {
+        let Some(scene) = fetched_or_skip(name) else {
+            continue;
+        };
+        assert_eq!(scene.name, name);
+        let tris = scene.triangle_count();
+        let expected = match name {
+            "bunny" | "bunny-glossy" => 69_666 + 12, // the bunny and the box without its blocks
+            "sponza" | "sponza-bump" => 66_450,
+            _ => 36, // Embree's box: 18 quads (two of them floor under the blocks, facing down)
+        };
+        assert!(
+            tris.abs_diff(expected) <= expected / 20,
+            "{name}: {tris} triangles, expected about {expected}"
+        );
+        renders(scene, 100.0);
+    }
+}
+
+#[test]
+fn the_bunny_stands_on_the_floor_facing_outward() {
+    let Some(s) = fetched_or_skip("bunny") else { return };
+    let bunny = s.meshes.iter().find(|m| m.name == "bunny").unwrap();
+    let lo = bunny.positions.iter().fold(f32::INFINITY, |a, p| a.min(p.y));
+    assert!((lo + 1.0).abs() < 1e-4, "lowest point {lo}");
+    let volume: f64 = bunny
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| bunny.positions[i as usize].as_dvec3());
+            a.dot(b.cross(c))
+        })
+        .sum();
+    assert!(volume > 0.0, "faces point inward");
+    assert!(bunny.normals.is_some());
+    assert!(s.materials[bunny.material].glossy.is_none());
+    let g = fetched_or_skip("bunny-glossy").unwrap();
+    assert!(g.has_glossy());
+}
+
+#[test]
+fn sponza_has_colours_per_group_and_a_sun() {
+    let Some(s) = fetched_or_skip("sponza") else {
+        return;
+    };
+    assert!(s.materials.len() > 10, "{} materials", s.materials.len());
+    let floor = s.materials.iter().find(|m| m.name == "sp_00_pod").unwrap();
+    let wall = s.materials.iter().find(|m| m.name == "sp_00_zid").unwrap();
+    assert_ne!(floor.albedo, wall.albedo);
+    assert!(s.lights.iter().any(|l| matches!(l, Light::Directional { .. })));
+    assert!(
+        s.warnings.iter().any(|w| w.contains("sponza.mtl")),
+        "{:?}",
+        s.warnings
+    );
+    let b = fetched_or_skip("sponza-bump").unwrap();
+    assert!(b.has_bump() && b.has_glossy());
+}
+
+/// The CLI reads `PBGI_SCENE_DIR` (set for the child only: no shared state
+/// between parallel tests).
+#[cfg(feature = "cli")]
+#[test]
+fn the_cli_honours_pbgi_scene_dir() {
+    let empty = temp_dir("cli");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pbgi"))
+        .args(["render", "bunny", "-o"])
+        .arg(empty.join("x.png"))
+        .env(fetched::SCENE_DIR_ENV, &empty)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("scripts/fetch-scenes.sh"), "{err}");
+    assert!(
+        err.contains(&empty.join("bunny/bunny.obj").display().to_string()),
+        "{err}"
+    );
+    let list = std::process::Command::new(env!("CARGO_BIN_EXE_pbgi"))
+        .arg("scenes")
+        .env(fetched::SCENE_DIR_ENV, &empty)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&list.stdout);
+    assert!(text.contains("nave") && text.contains("missing"), "{text}");
+}
