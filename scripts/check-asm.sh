@@ -1,40 +1,42 @@
 #!/usr/bin/env bash
-# Checks in the machine code that each kernel clone uses its instruction set.
+# Checks in the machine code that each clone uses its instruction set.
 #
-#   scripts/check-asm.sh            x86-64: builds the cut_bench example and checks
-#                                   the AVX-512 clone (zmm and mask k registers), the
-#                                   AVX2 clone (ymm, no zmm), the portable clone
+#   scripts/check-asm.sh            x86-64: builds the pbgi binary and checks the
+#                                   AVX-512 clones (zmm and mask k registers), the
+#                                   AVX2 clones (ymm, no zmm), the portable ones
 #                                   (neither)
-#   scripts/check-asm.sh aarch64    the NEON clone (NEON .4s vector arithmetic) in
-#                                   target/arm/.../cut_bench, built by the ARM stage
-#                                   of .ci/run (not built here)
+#   scripts/check-asm.sh aarch64    the NEON clones (NEON .4s vector arithmetic) in
+#                                   target/arm/.../pbgi, built by the ARM stage of
+#                                   .ci/run (not built here)
 #
-# The clones (run_avx512, run_avx2, run_neon, run_portable in src/cut/dispatch.rs)
-# are generic over the sink, so their instances are read from a binary that uses
-# them: the cut_bench example. Every kernel (scalar, single, packet, hybrid) is
-# inlined into each clone; a pbgi function the clone *calls* instead is compiled
-# for the baseline target (SSE2), whatever the clone's features (TOOLCHAIN.md:
-# measured 12x slower), so such calls fail the check too, by name.
+# Two families of clones, each compiled once per instruction set:
+#   traversal  run_{avx512,avx2,neon,portable} in src/cut/dispatch.rs (generic
+#              over the sink: every instance the binary holds is checked)
+#   shading    packet_* (the 16-lane splatting and convolution) and cuts_* (the
+#              scalar pipeline, which must not call out either) in
+#              src/microbuffer/lanes.rs
+# Everything a clone runs is inlined into it; a pbgi function it *calls*
+# instead is compiled for the baseline target (SSE2), whatever the clone's
+# features (TOOLCHAIN.md: measured 12x slower), so such calls fail the check,
+# by name.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 arch=${1:-x86_64}
 case "$arch" in
 x86_64)
-    cargo build --release --example cut_bench --quiet
-    bin=target/release/examples/cut_bench
-    asm=target/cut_bench.asm
+    cargo build --release --bin pbgi --quiet
+    bin=target/release/pbgi
+    asm=target/pbgi.asm
     objdump -d --no-show-raw-insn -C "$bin" > "$asm"
-    clones="run_avx512 run_avx2 run_portable"
-    simd_clones="run_avx512 run_avx2"
+    isas="avx512 avx2 portable"
     ;;
 aarch64)
-    bin=target/arm/aarch64-unknown-linux-gnu/release/examples/cut_bench
+    bin=target/arm/aarch64-unknown-linux-gnu/release/pbgi
     [ -f "$bin" ] || { echo "FAIL  $bin not built (run the ARM stage of .ci/run first)"; exit 1; }
-    asm=target/arm/cut_bench.asm
+    asm=target/arm/pbgi.asm
     aarch64-linux-gnu-objdump -d --no-show-raw-insn -C "$bin" > "$asm"
-    clones="run_neon run_portable"
-    simd_clones="run_neon"
+    isas="neon portable"
     ;;
 *)
     echo "usage: $0 [x86_64|aarch64]" >&2
@@ -42,59 +44,41 @@ aarch64)
     ;;
 esac
 
+# The symbol of clone `family` for `isa`, as it appears in the disassembly.
+symbol() {
+    case "$1" in
+    traversal) echo "dispatch::run_$2::<" ;;
+    shading) echo "lanes::packet_$2>" ;;
+    scalar-shading) echo "lanes::cuts_$2>" ;;
+    esac
+}
+
 # Bodies of every function whose name contains $1.
 bodies() { awk -v pat="$1" '/^[0-9a-f]+ <.*>:$/ { p = index($0, pat) > 0 } p' "$asm"; }
 count() { grep -cE "$1" || true; }
 
 fail=0
-check() { # clone, pattern, op (gt0 | eq0), what
+check() { # symbol, label, pattern, op (gt0 | eq0), what
     local n
-    n=$(bodies "dispatch::$1::<" | count "$2")
-    if { [ "$3" = gt0 ] && [ "$n" -gt 0 ]; } || { [ "$3" = eq0 ] && [ "$n" -eq 0 ]; }; then
-        printf '  ok    %-13s %-34s %6s instructions\n' "$1" "$4" "$n"
+    n=$(bodies "$1" | count "$3")
+    if { [ "$4" = gt0 ] && [ "$n" -gt 0 ]; } || { [ "$4" = eq0 ] && [ "$n" -eq 0 ]; }; then
+        printf '  ok    %-24s %-34s %6s instructions\n' "$2" "$5" "$n"
     else
-        printf '  FAIL  %-13s %-34s %6s instructions (expected %s)\n' "$1" "$4" "$n" "${3/gt0/> 0}"
+        printf '  FAIL  %-24s %-34s %6s instructions (expected %s)\n' "$2" "$5" "$n" "${4/gt0/> 0}"
         fail=1
     fi
 }
 
-echo "kernel clones in $bin:"
-for clone in $clones; do
-    n=$(bodies "dispatch::$clone::<" | grep -c '^[0-9a-f]* <' || true)
-    lines=$(bodies "dispatch::$clone::<" | wc -l)
-    if [ "$lines" -lt 10 ]; then
-        echo "  FAIL  no instance of $clone in $bin (inlined or renamed?)"
-        fail=1
-    else
-        printf '  %-19s %d instance(s), %d instructions\n' "$clone" "$n" "$lines"
-    fi
-done
-
-case "$arch" in
-x86_64)
-    check run_avx512 '%zmm' gt0 'uses zmm'
-    check run_avx512 '%k[1-7]' gt0 'uses mask registers k1-k7'
-    check run_avx2 '%ymm' gt0 'uses ymm'
-    check run_avx2 '%zmm' eq0 'no zmm'
-    check run_avx2 '%k[0-7]' eq0 'no mask registers'
-    check run_portable '%ymm|%zmm' eq0 'no ymm or zmm'
-    ;;
-aarch64)
-    # fmla/fmul/fadd/fcm* on v registers arranged as four f32 lanes.
-    check run_neon '\sf[a-z]+\s+v[0-9]+\.4s' gt0 'NEON f32x4 arithmetic (v.4s)'
-    check run_neon '\sz[0-9]+\.|\sp[0-9]+\.' eq0 'no SVE registers'
-    ;;
-esac
-
-# Out-of-line pbgi code called from a SIMD clone runs on the baseline target.
-for clone in $simd_clones; do
-    callees=$(bodies "dispatch::$clone::<" |
-        sed -nE 's/.*\s(call|bl)q?\s+[0-9a-f]+ <(.*)>$/\2/p' | grep 'pbgi::' | grep -v "dispatch::$clone::<" |
+# Out-of-line pbgi code called from a clone runs on the baseline target.
+calls() { # symbol, label
+    local callees
+    callees=$(bodies "$1" |
+        sed -nE 's/.*\s(call|bl)q?\s+[0-9a-f]+ <(.*)>$/\2/p' | grep 'pbgi::' | grep -vF "$1" |
         sort | uniq -c | sort -rn || true)
     if [ -z "$callees" ]; then
-        printf '  ok    %-13s %-34s\n' "$clone" 'calls no out-of-line pbgi code'
+        printf '  ok    %-24s %-34s\n' "$2" 'calls no out-of-line pbgi code'
     else
-        printf '  FAIL  %-13s %s\n' "$clone" 'calls out-of-line pbgi code, compiled for the baseline target:'
+        printf '  FAIL  %-24s %s\n' "$2" 'calls out-of-line pbgi code, compiled for the baseline target:'
         while read -r n name; do
             b=$(awk -v pat="<$name>:" '/^[0-9a-f]+ <.*>:$/ { p = index($0, pat) > 0 } p' "$asm")
             printf '          %3d call site(s): %s\n' "$n" "$name"
@@ -105,6 +89,45 @@ for clone in $simd_clones; do
         echo "          make it #[inline(always)] (a closure too) or #[multiversion::inherit_target]"
         fail=1
     fi
+}
+
+echo "clones in $bin:"
+for family in traversal shading scalar-shading; do
+    for isa in $isas; do
+        sym=$(symbol "$family" "$isa")
+        label="$family $isa"
+        n=$(bodies "$sym" | grep -c '^[0-9a-f]* <' || true)
+        lines=$(bodies "$sym" | wc -l)
+        if [ "$lines" -lt 10 ]; then
+            echo "  FAIL  no instance of $sym in $bin (inlined or renamed?)"
+            fail=1
+            continue
+        fi
+        printf '  %-30s %d instance(s), %d instructions\n' "$label" "$n" "$lines"
+        case "$isa" in
+        avx512)
+            # The scalar pipeline has no vectors to speak of; the others must use zmm and k.
+            if [ "$family" != scalar-shading ]; then
+                check "$sym" "$label" '%zmm' gt0 'uses zmm'
+                check "$sym" "$label" '%k[1-7]' gt0 'uses mask registers k1-k7'
+            fi
+            ;;
+        avx2)
+            [ "$family" != scalar-shading ] && check "$sym" "$label" '%ymm' gt0 'uses ymm'
+            check "$sym" "$label" '%zmm' eq0 'no zmm'
+            check "$sym" "$label" '%k[0-7]' eq0 'no mask registers'
+            ;;
+        neon)
+            # fmla/fmul/fadd/fcm* on v registers arranged as four f32 lanes.
+            [ "$family" != scalar-shading ] && check "$sym" "$label" '\sf[a-z]+\s+v[0-9]+\.4s' gt0 'NEON f32x4 arithmetic (v.4s)'
+            check "$sym" "$label" '\sz[0-9]+\.|\sp[0-9]+\.' eq0 'no SVE registers'
+            ;;
+        portable)
+            [ "$arch" = x86_64 ] && check "$sym" "$label" '%ymm|%zmm' eq0 'no ymm or zmm'
+            ;;
+        esac
+        [ "$isa" != portable ] && calls "$sym" "$label"
+    done
 done
 
 [ "$fail" -eq 0 ] && echo "check-asm: all clones use their instruction set" || echo "check-asm: FAILED"

@@ -13,7 +13,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::{CutOptions, CutSink, Isa, LANES, Receiver, Scheme, Traversal, TraversalStats};
 use crate::error::Error;
 use crate::light::Lights;
-use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_cuts, shade_packet};
+use crate::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
 use crate::points::bake::{BakeOptions, bake};
 use crate::points::{PointCloud, Surfel};
 use crate::scene::{Bump, Material, Scene, SceneError};
@@ -723,20 +723,32 @@ fn gather_bounce(
         .map(|s| Receiver::new(s.position + s.normal * (s.radius * 1e-3), s.normal))
         .collect::<Result<_, _>>()?;
     let proto = MicroBuffer::new(opts.microbuffer)?;
+    // The surfels' packets (tree order: neighbours) through the scheme's
+    // shading pipeline, as in `Frame::shade`.
+    let isa = traversal.isa();
     let gathered: Vec<Vec3> = receivers
         .par_chunks(LANES)
-        .flat_map_iter(|chunk| {
-            let mut buffers = vec![proto.clone(); chunk.len()];
-            for (b, r) in buffers.iter_mut().zip(chunk) {
-                b.reset(r.position(), r.normal());
-            }
-            let mut sink = MicroBufferSink {
-                tree,
-                buffers: &mut buffers,
-            };
-            traversal.run(scheme, chunk, &mut sink);
-            buffers.iter().map(|b| b.irradiance(tree)).collect::<Vec<_>>()
-        })
+        .map_init(
+            || (PacketCuts::for_scheme(scheme, tree), vec![proto.clone(); LANES]),
+            |(cuts, buffers), chunk| {
+                cuts.run(&traversal, scheme, chunk);
+                let buffers = &mut buffers[..chunk.len()];
+                for (b, r) in buffers.iter_mut().zip(chunk) {
+                    b.reset(r.position(), r.normal());
+                }
+                let mut out = vec![Vec3::ZERO; chunk.len()];
+                match cuts {
+                    PacketCuts::Lists(l) => {
+                        shade_cuts(isa, buffers, tree, &l.0, Convolution::Irradiance, &mut out)
+                    }
+                    PacketCuts::Lanes(c) => {
+                        shade_packet(isa, buffers, tree, c, Convolution::Irradiance, &mut out)
+                    }
+                }
+                out
+            },
+        )
+        .flatten_iter()
         .collect();
     let next: Vec<Surfel> = surfels
         .iter()

@@ -116,14 +116,26 @@ pub trait CutSink {
     /// bit `l` of `lanes`. Override to consume whole steps at once.
     #[inline(always)]
     fn splat_nodes(&mut self, receiver: usize, nodes: &[NodeId; LANES], lanes: u16) {
-        node_test::for_each_lane(lanes, |l| self.splat(receiver, nodes[l]));
+        // A plain loop, not a closure: a sink's `splat` inlined into a large
+        // closure may leave it out of line, compiled for the baseline target.
+        let mut bits = lanes;
+        while bits != 0 {
+            let l = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            self.splat(receiver, nodes[l]);
+        }
     }
 
     /// A packet step: `node` is in the cut of receiver `base + l` for every
     /// set bit `l` of `lanes`. Override to consume whole steps at once.
     #[inline(always)]
     fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
-        node_test::for_each_lane(lanes, |l| self.splat(base + l, node));
+        let mut bits = lanes;
+        while bits != 0 {
+            let l = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            self.splat(base + l, node);
+        }
     }
 }
 

@@ -29,6 +29,11 @@ pub(crate) trait Real:
     fn splat(x: f32) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
+    fn floor(self) -> Self;
+    fn ceil(self) -> Self;
+    /// `table[i]` per lane, for lanes holding non-negative whole numbers
+    /// (indices kept as floats, exact below 2²⁴); out of range is a bug.
+    fn gather(table: &[f32], i: Self) -> Self;
     fn le(self, o: Self) -> Self::Mask;
     fn lt(self, o: Self) -> Self::Mask;
     /// `if m { a } else { b }` per lane.
@@ -60,6 +65,18 @@ impl Real for f32 {
         f32::abs(self)
     }
     #[inline(always)]
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    #[inline(always)]
+    fn ceil(self) -> Self {
+        f32::ceil(self)
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], i: Self) -> Self {
+        table[i as usize]
+    }
+    #[inline(always)]
     fn select(m: bool, a: Self, b: Self) -> Self {
         if m { a } else { b }
     }
@@ -86,6 +103,25 @@ impl Real for F32s {
     #[inline(always)]
     fn abs(self) -> Self {
         SimdFloat::abs(self)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        std::simd::StdFloat::floor(self)
+    }
+    #[inline(always)]
+    fn ceil(self) -> Self {
+        std::simd::StdFloat::ceil(self)
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], i: Self) -> Self {
+        let i = i.cast::<u32>().to_array();
+        // A plain loop: a closure given to `from_fn` may be left out of line,
+        // compiled for the baseline target instead of the caller's clone.
+        let mut v = [0.0f32; LANES];
+        for (v, &i) in v.iter_mut().zip(&i) {
+            *v = table[i as usize];
+        }
+        Simd::from_array(v)
     }
     #[inline(always)]
     fn select(m: M32s, a: Self, b: Self) -> Self {

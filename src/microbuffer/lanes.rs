@@ -17,7 +17,8 @@ use std::simd::prelude::*;
 
 use glam::Vec3;
 
-use super::{COVER_ONE, MicroBuffer, NO_KEY};
+use super::splat::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
+use super::{COVER_ONE, MicroBuffer, NO_KEY, Table};
 use crate::cut::node_test::{F32s, LANES, Real};
 use crate::cut::{CutSink, Isa};
 use crate::tree::{NodeId, SplatRecord, Tree};
@@ -299,15 +300,19 @@ pub fn shade_packet(
         "at most 16 buffers, an output each"
     );
     if !bufs.is_empty() {
+        // The pixel tables, shared by the buffers of one resolution (taken
+        // here: reference counting has no place in the clones).
+        let table = bufs[0].table.clone();
+        let t = &*table;
         match isa {
             // SAFETY: as in `shade_cuts`.
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { packet_avx512(bufs, tree, cut, what, out) },
+            Isa::Avx512 => unsafe { packet_avx512(t, bufs, tree, cut, what, out) },
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { packet_avx2(bufs, tree, cut, what, out) },
+            Isa::Avx2 => unsafe { packet_avx2(t, bufs, tree, cut, what, out) },
             #[cfg(target_arch = "aarch64")]
-            Isa::Neon => unsafe { packet_neon(bufs, tree, cut, what, out) },
-            _ => packet_portable(bufs, tree, cut, what, out),
+            Isa::Neon => unsafe { packet_neon(t, bufs, tree, cut, what, out) },
+            _ => packet_portable(t, bufs, tree, cut, what, out),
         }
     }
     cut.clear();
@@ -345,7 +350,7 @@ clones!(
 
 clones!(
     packet_body,
-    (bufs: &mut [MicroBuffer], tree: &Tree, cut: &mut PacketCut, what: Convolution, out: &mut [Vec3]),
+    (t: &Table, bufs: &mut [MicroBuffer], tree: &Tree, cut: &mut PacketCut, what: Convolution, out: &mut [Vec3]),
     packet_avx512,
     packet_avx2,
     packet_neon,
@@ -365,50 +370,201 @@ fn cuts_body(
             let Some(rec) = tree.splat.get(node as usize) else {
                 continue; // not a node of `tree`
             };
-            if let Some(s) = mb.locate(rec) {
-                mb.apply(rec, node, &s);
+            if let Some(l) = mb.locate(rec) {
+                mb.apply(rec, node, &l);
             }
         }
         *o = match what {
-            Convolution::Irradiance => mb.irradiance(tree),
-            Convolution::Occlusion => Vec3::splat(mb.occlusion()),
+            Convolution::Irradiance => mb.irradiance_inline(tree),
+            Convolution::Occlusion => Vec3::splat(mb.occlusion_inline()),
         };
     }
 }
 
 #[inline(always)]
 fn packet_body(
+    t: &Table,
     bufs: &mut [MicroBuffer],
     tree: &Tree,
     cut: &mut PacketCut,
     what: Convolution,
     out: &mut [Vec3],
 ) {
+    if bufs.iter().any(|b| b.table.n != t.n) {
+        // Buffers of different resolutions cannot share lanes: one at a time.
+        for (i, (mb, o)) in bufs.iter_mut().zip(out.iter_mut()).enumerate() {
+            for &node in &cut.nodes {
+                if cut.lanes[node as usize] >> i & 1 != 0
+                    && let Some(rec) = tree.splat.get(node as usize)
+                    && let Some(l) = mb.locate(rec)
+                {
+                    mb.apply(rec, node, &l);
+                }
+            }
+            *o = convolve(mb, tree, what);
+        }
+        return;
+    }
     let frames = FrameLanes::of(bufs);
     let half = F32s::splat(bufs[0].half_n());
     let used = crate::cut::node_test::lane_mask(bufs.len());
+    let zero = F32s::splat(0.0);
     for &node in &cut.nodes {
         let lanes = cut.lanes[node as usize] & used;
         let Some(rec) = tree.splat.get(node as usize) else {
             continue; // not a node of `tree`
         };
-        let l = locate(&NodeSplat::of(rec).splat(), &frames, half);
-        let mut show = l.valid.to_bitmask() as u16 & lanes;
+        let s = NodeSplat::of(rec).splat();
+        let l = locate(&s, &frames, half);
+        let show = l.valid.to_bitmask() as u16 & lanes;
         if show == 0 {
             continue;
         }
-        let (d, omega, x, y) = (l.d.to_array(), l.omega.to_array(), l.x.to_array(), l.y.to_array());
-        let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());
-        while show != 0 {
-            let i = show.trailing_zeros() as usize;
-            show &= show - 1;
-            let mb = &mut bufs[i];
-            let s = mb.spot(d[i], omega[i], Vec3::new(wx[i], wy[i], wz[i]), x[i], y[i]);
-            mb.apply(rec, node, &s);
+        // Class, and everything up to the pixel loops, for all lanes at once
+        // (the scalar pipeline's `MicroBuffer::apply`, lane by lane).
+        let pixel = pixel_of(t, l.x, l.y);
+        let visible = zero.lt(l.wz);
+        let pixel_omega = F32s::gather(&t.solid_angle, pixel);
+        let small_m = visible & l.omega.lt(pixel_omega);
+        let small = small_m.to_bitmask() as u16 & show;
+        let large = show & !small;
+        let leaf = rec.leaf != 0;
+        let (d, pix, vis) = (l.d.to_array(), pixel.to_array(), visible.to_bitmask() as u16);
+        // Small splats, and the fallback of leaves covering no pixel centre
+        // (with `Ω` capped at the pixel's).
+        // (An `if`, not `bool::then` with a closure: an out-of-line closure
+        // would be compiled for the baseline target, not this clone.)
+        let small_plan = if small != 0 || (leaf && large != 0) {
+            Some(lanes4(plan_small(
+                t,
+                l.x,
+                l.y,
+                F32s::select(small_m, l.omega, pixel_omega),
+            )))
+        } else {
+            None
+        };
+        if let Some(sp) = &small_plan {
+            for i in bits(small) {
+                bufs[i].draw_small(&sp.lane(i), super::key(d[i], node), pix[i]);
+            }
+        }
+        if large == 0 {
+            continue;
+        }
+        if leaf {
+            let dp = plan_disk(t, &frames, &s, l.x, l.y, pixel, l.d);
+            let m = [dp.m[0].to_array(), dp.m[1].to_array(), dp.m[2].to_array()];
+            let c = [dp.c[0].to_array(), dp.c[1].to_array(), dp.c[2].to_array()];
+            let (mc, r, bx) = (dp.mc.to_array(), dp.r.to_array(), boxes(&dp.bx));
+            for i in bits(large) {
+                let plan = DiskPlan {
+                    m: [m[0][i], m[1][i], m[2][i]],
+                    c: [c[0][i], c[1][i], c[2][i]],
+                    mc: mc[i],
+                    r: r[i],
+                    bx: bx.lane(i),
+                };
+                if !bufs[i].draw_disk(&plan, node)
+                    && vis >> i & 1 != 0
+                    && let Some(sp) = &small_plan
+                {
+                    bufs[i].draw_small(&sp.lane(i), super::key(d[i], node), pix[i]);
+                }
+            }
+        } else {
+            let cp = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
+            let (a, inv_s) = (cp.a.to_array(), cp.inv_s.to_array());
+            let (inner2, outer2, bx) = (cp.inner2.to_array(), cp.outer2.to_array(), boxes(&cp.bx));
+            let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());
+            for i in bits(large) {
+                let plan = ConePlan {
+                    a: a[i],
+                    inv_s: inv_s[i],
+                    inner2: inner2[i],
+                    outer2: outer2[i],
+                    bx: bx.lane(i),
+                };
+                bufs[i].draw_cone(Vec3::new(wx[i], wy[i], wz[i]), &plan, super::key(d[i], node));
+            }
         }
     }
     for (mb, o) in bufs.iter().zip(out.iter_mut()) {
         *o = convolve(mb, tree, what);
+    }
+}
+
+/// The set bits of a lane mask, lowest first.
+struct Bits(u16);
+
+impl Iterator for Bits {
+    type Item = usize;
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        if self.0 == 0 {
+            return None;
+        }
+        let i = self.0.trailing_zeros() as usize;
+        self.0 &= self.0 - 1;
+        Some(i)
+    }
+}
+
+#[inline(always)]
+fn bits(m: u16) -> Bits {
+    Bits(m)
+}
+
+/// A small-splat plan of 16 lanes, as arrays.
+struct SmallLanes {
+    p: [[f32; LANES]; 4],
+    w: [[f32; LANES]; 4],
+    cover: [[f32; LANES]; 4],
+}
+
+#[inline(always)]
+fn lanes4(p: SmallPlan<F32s>) -> SmallLanes {
+    SmallLanes {
+        p: arrays4(p.p),
+        w: arrays4(p.w),
+        cover: arrays4(p.cover),
+    }
+}
+
+#[inline(always)]
+fn arrays4(v: [F32s; 4]) -> [[f32; LANES]; 4] {
+    [v[0].to_array(), v[1].to_array(), v[2].to_array(), v[3].to_array()]
+}
+
+impl SmallLanes {
+    #[inline(always)]
+    fn lane(&self, i: usize) -> SmallPlan<f32> {
+        let (p, w, c) = (&self.p, &self.w, &self.cover);
+        SmallPlan {
+            p: [p[0][i], p[1][i], p[2][i], p[3][i]],
+            w: [w[0][i], w[1][i], w[2][i], w[3][i]],
+            cover: [c[0][i], c[1][i], c[2][i], c[3][i]],
+        }
+    }
+}
+
+/// 16 lanes of pixel boxes, as arrays.
+struct BoxLanes([[f32; LANES]; 4]);
+
+#[inline(always)]
+fn boxes(b: &PixelBox<F32s>) -> BoxLanes {
+    BoxLanes([b.c0.to_array(), b.c1.to_array(), b.r0.to_array(), b.r1.to_array()])
+}
+
+impl BoxLanes {
+    #[inline(always)]
+    fn lane(&self, i: usize) -> PixelBox<f32> {
+        PixelBox {
+            c0: self.0[0][i],
+            c1: self.0[1][i],
+            r0: self.0[2][i],
+            r1: self.0[3][i],
+        }
     }
 }
 

@@ -21,6 +21,7 @@
 //! smaller than a pixel that share it; the sum is clamped to one.
 
 mod lanes;
+mod splat;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -34,7 +35,7 @@ use crate::error::Error;
 use crate::tree::{NodeId, SplatRecord, Tree};
 
 pub use lanes::{Convolution, PacketCut, shade_cuts, shade_packet};
-use lanes::{FrameLanes, NodeSplat, locate};
+use lanes::{FrameLanes, Located, NodeSplat, locate};
 
 // ---------------------------------------------------------------------------
 // The octahedral hemisphere map and its per-pixel tables
@@ -238,97 +239,10 @@ impl Table {
             .unwrap_or_else(|e| e.into_inner());
         map.entry(n).or_insert_with(|| Arc::new(Table::new(n))).clone()
     }
-
-    /// The pixels whose centres lie within `h` pixels of `(x, y)` (continuous
-    /// pixel coordinates): columns and rows, inclusive, clamped to the grid.
-    #[inline]
-    fn box_around(&self, x: f32, y: f32, h: f32) -> (usize, usize, usize, usize) {
-        let last = (self.n - 1) as f32;
-        // Pixel c's centre is c + 0.5; `max`/`min` keep the casts in range
-        // (and turn a NaN into 0).
-        let lo = |t: f32| (t - h - 0.5).ceil().max(0.0).min(last) as usize;
-        let hi = |t: f32| (t + h - 0.5).floor().max(0.0).min(last) as usize;
-        (lo(x), hi(x), lo(y), hi(y))
-    }
-
-    /// The box of a footprint of angular radius `angle` around `(x, y)` in
-    /// pixel `pixel`.
-    #[inline]
-    fn footprint(&self, x: f32, y: f32, pixel: usize, angle: f32) -> (usize, usize, usize, usize) {
-        let near = angle * self.reach[pixel];
-        let h = if near <= NEAR as f32 {
-            near
-        } else {
-            angle * self.reach_max
-        };
-        self.box_around(x, y, h + 0.01)
-    }
-}
-
-/// A cluster's soft cone: centre direction `w` (local), chord radius `a`
-/// where coverage is ½, ramp `1/s`, full inside chord² `inner2`, none from `outer2`.
-struct Cone {
-    w: Vec3,
-    a: f32,
-    inv_s: f32,
-    inner2: f32,
-    outer2: f32,
-}
-
-impl Cone {
-    /// Whether the cone covers the pixel(s) of centre direction `u`, and by how much.
-    #[inline(always)]
-    fn cover<V: Real>(&self, ux: V, uy: V, uz: V) -> (V::Mask, V) {
-        let (ex, ey, ez) = (
-            ux - V::splat(self.w.x),
-            uy - V::splat(self.w.y),
-            uz - V::splat(self.w.z),
-        );
-        let c2 = ex * ex + ey * ey + ez * ez;
-        let one = V::splat(1.0);
-        let ramp = (V::splat(0.5) + (V::splat(self.a) - c2.sqrt()) * V::splat(self.inv_s)).min_of(one);
-        let cover = V::select(c2.le(V::splat(self.inner2)), one, ramp);
-        (c2.lt(V::splat(self.outer2)) & V::splat(0.0).lt(cover), cover)
-    }
-}
-
-/// A leaf's disk in the receiver's frame: normal `m`, centre `c`, `m·c`,
-/// radius `r`.
-struct Disk {
-    m: Vec3,
-    mc: f32,
-    c: Vec3,
-    r: f32,
-}
-
-impl Disk {
-    /// Whether the ray(s) of direction `u` from the receiver hit the disk's
-    /// front, at what distance, and the pixel's coverage: the disk's edge is
-    /// a ramp one pixel (angular size `delta`) wide at the hit distance, so a
-    /// disk over a few pixels still shows its true area on average.
-    #[inline(always)]
-    fn hit<V: Real>(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
-        let denom = V::splat(self.m.x) * ux + V::splat(self.m.y) * uy + V::splat(self.m.z) * uz;
-        let t = V::splat(self.mc) / denom;
-        let ex = ux * t - V::splat(self.c.x);
-        let ey = uy * t - V::splat(self.c.y);
-        let ez = uz * t - V::splat(self.c.z);
-        let e = (ex * ex + ey * ey + ez * ez).sqrt();
-        let zero = V::splat(0.0);
-        let cover = (V::splat(0.5) + (V::splat(self.r) - e) / (delta * t)).min_of(V::splat(1.0));
-        (denom.lt(zero) & zero.lt(t) & zero.lt(cover), t, cover)
-    }
 }
 
 // ---------------------------------------------------------------------------
 // Pixels
-
-/// Leaf disks are rasterized this much larger than their radius, so that
-/// the disks of a surface overlap instead of leaving holes between them.
-const DISK_INFLATION: f32 = 1.2;
-
-/// Width of a cluster's coverage ramp, relative to its radius.
-const CONE_SOFTNESS: f32 = 1.0;
 
 /// One unit of coverage in the fixed-point sums.
 const COVER_ONE: f32 = (1u32 << 24) as f32;
@@ -341,26 +255,6 @@ const COVER_CAP: u32 = 1 << 25;
 /// No splat: larger than every key, and positive as an `i64` (keys compare
 /// as signed integers where the instruction set has no unsigned compare).
 const NO_KEY: u64 = i64::MAX as u64;
-
-/// An upper bound of `asin(x)` for `x ∈ [0, 1]` (footprint boxes need a
-/// bound, not the angle): `asin` is convex there, so below the chord
-/// through `(0, 0)` and `(½, π/6)` up to ½, and through `(½, π/6)` and `(1, π/2)` above.
-#[inline(always)]
-fn sine_angle_bound(x: f32) -> f32 {
-    const A: f32 = std::f32::consts::FRAC_PI_3 * 1.0001; // (π/6)/½
-    const B: f32 = (std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_6) * 2.0 * 1.0001;
-    if x <= 0.5 {
-        A * x
-    } else {
-        std::f32::consts::FRAC_PI_6 * 1.0001 + B * (x - 0.5)
-    }
-}
-
-/// An upper bound of the angle `2·asin(c/2)` of chord `c ∈ [0, 2]`.
-#[inline(always)]
-fn chord_angle_bound(c: f32) -> f32 {
-    2.0 * sine_angle_bound((0.5 * c).min(1.0))
-}
 
 /// `(depth, node)` as one integer ordered lexicographically: the bits of a
 /// non-negative, non-NaN `f32` order like its value.
@@ -393,23 +287,6 @@ pub struct MicroBuffer {
     any: Vec<u64>,
     /// Per pixel: coverage in units of 2⁻²⁴, summed (saturating at [`COVER_CAP`]).
     cover: Vec<u32>,
-}
-
-/// Where a splat's centre falls, from [`MicroBuffer::locate`].
-#[derive(Clone, Copy, Debug)]
-struct Spot {
-    /// Local direction of the centre.
-    w: Vec3,
-    /// Distance to the centre.
-    d: f32,
-    /// Projected solid angle `A·max(0, −n̄·ω)/d²`.
-    omega: f32,
-    /// Continuous pixel coordinates (pixel `(c, r)` spans `[c, c+1) × [r, r+1)`);
-    /// a centre below the horizon is located at the horizon point above it.
-    x: f32,
-    y: f32,
-    /// The pixel `(x, y)` lies in.
-    pixel: usize,
 }
 
 impl MicroBuffer {
@@ -466,37 +343,8 @@ impl MicroBuffer {
     }
 
     #[inline]
-    fn to_local(&self, w: Vec3) -> Vec3 {
-        Vec3::new(w.dot(self.frame[0]), w.dot(self.frame[1]), w.dot(self.frame[2]))
-    }
-
-    #[inline]
     fn to_world(&self, l: Vec3) -> Vec3 {
         self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z
-    }
-
-    /// [`write`](Self::write) where `m`, else nothing, without a branch:
-    /// whether a pixel is covered is data the branch predictor cannot learn.
-    #[inline(always)]
-    fn write_if(&mut self, m: bool, p: usize, key: u64, coverage: f32, owns: bool) {
-        let c = (f32::select(m, coverage, 0.0).min_of(1.0) * COVER_ONE) as u32;
-        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
-        let key = if m { key } else { NO_KEY };
-        self.any[p] = self.any[p].min(key);
-        let own_key = if owns { key } else { NO_KEY };
-        self.own[p] = self.own[p].min(own_key);
-    }
-
-    /// Adds a splat of `key` covering the fraction `coverage` ∈ [0, 1] of pixel `p`.
-    #[inline(always)]
-    fn write(&mut self, p: usize, key: u64, coverage: f32, owns: bool) {
-        debug_assert!(coverage >= 0.0, "coverage {coverage}");
-        let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
-        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
-        self.any[p] = self.any[p].min(key);
-        if owns {
-            self.own[p] = self.own[p].min(key);
-        }
     }
 
     /// The receiver's position and frame, for the lane geometry.
@@ -525,32 +373,16 @@ impl MicroBuffer {
         0.5 * self.table.n as f32
     }
 
-    /// The spot of a located splat (one lane of [`locate`]).
-    #[inline(always)]
-    fn spot(&self, d: f32, omega: f32, w: Vec3, x: f32, y: f32) -> Spot {
-        let last = self.table.n - 1;
-        // `as usize` saturates at 0 (and maps NaN to 0).
-        let (c, r) = ((x as usize).min(last), (y as usize).min(last));
-        Spot {
-            w,
-            d,
-            omega,
-            x,
-            y,
-            pixel: r * self.table.n + c,
-        }
-    }
-
     /// Where the node `rec` falls; `None` for a node that cannot show: at
     /// the receiver's position, facing away, or straight below.
     #[inline(always)]
-    fn locate(&self, rec: &SplatRecord) -> Option<Spot> {
+    fn locate(&self, rec: &SplatRecord) -> Option<Located<f32>> {
         let l = locate(&NodeSplat::of(rec), &self.frame_lanes(), self.half_n());
-        l.valid
-            .then(|| self.spot(l.d, l.omega, Vec3::new(l.wx, l.wy, l.wz), l.x, l.y))
+        l.valid.then_some(l)
     }
 
-    /// Rasterizes node `node` of `tree`, one node of this receiver's cut.
+    /// Rasterizes node `node` of `tree`, one node of this receiver's cut
+    /// (the scalar pipeline; [`shade_packet`] draws the same in 16 lanes).
     ///
     /// With `Ω = A·max(0, −n̄·ω)/d²` the node's projected solid angle (area
     /// `A`, mean normal `n̄`, direction `ω` and distance `d` of its centre):
@@ -572,138 +404,20 @@ impl MicroBuffer {
     /// centre is the receiver's position has no direction and is skipped.
     /// A node `tree` does not have is ignored.
     pub fn splat(&mut self, tree: &Tree, node: NodeId) {
+        self.splat_inline(tree, node);
+    }
+
+    /// [`splat`](Self::splat), inlined into the caller (a traversal clone
+    /// calling it through [`MicroBufferSink`] compiles it with its own
+    /// instruction set).
+    #[inline(always)]
+    pub(crate) fn splat_inline(&mut self, tree: &Tree, node: NodeId) {
         let Some(rec) = tree.splat.get(node as usize) else {
             return;
         };
-        if let Some(s) = self.locate(rec) {
-            self.apply(rec, node, &s);
+        if let Some(l) = self.locate(rec) {
+            self.apply(rec, node, &l);
         }
-    }
-
-    /// Rasterizes node `node` (record `rec`) located at `s`.
-    #[inline(always)]
-    fn apply(&mut self, rec: &SplatRecord, node: NodeId, s: &Spot) {
-        let key = key(s.d, node);
-        let table = &*self.table;
-        let visible = s.w.z > 0.0;
-        let pixel_omega = table.solid_angle[s.pixel];
-        if visible && s.omega < pixel_omega {
-            self.splat_small(s, key, s.omega);
-        } else if rec.leaf != 0 {
-            // `Ω` is a far-field estimate that blows up for a disk nearly in
-            // the receiver's plane: a leaf missing every centre gets a pixel at most.
-            if !self.splat_disk(node, rec, s) && visible {
-                self.splat_small(s, key, pixel_omega);
-            }
-        } else {
-            let delta = if visible {
-                table.pixel_size[s.pixel]
-            } else {
-                table.pixel_angle
-            };
-            self.splat_cone(s, key, delta);
-        }
-    }
-
-    /// Spreads a splat of solid angle `omega` at `spot` over the 2×2 pixels
-    /// around it (bilinear weights between pixel centres, clamped into the grid).
-    #[inline(always)]
-    fn splat_small(&mut self, spot: &Spot, key: u64, omega: f32) {
-        let n = self.table.n;
-        let (gx, gy) = (spot.x - 0.5, spot.y - 0.5);
-        let (x0, y0) = (gx.floor(), gy.floor());
-        let (tx, ty) = (gx - x0, gy - y0);
-        let last = (n - 1) as f32;
-        let idx = |t: f32| t.max(0.0).min(last) as usize;
-        let (c0, c1, r0, r1) = (idx(x0), idx(x0 + 1.0), idx(y0), idx(y0 + 1.0));
-        for (c, r, weight) in [
-            (c0, r0, (1.0 - tx) * (1.0 - ty)),
-            (c1, r0, tx * (1.0 - ty)),
-            (c0, r1, (1.0 - tx) * ty),
-            (c1, r1, tx * ty),
-        ] {
-            let p = r * n + c;
-            let cover = weight * (omega / self.table.solid_angle[p]);
-            self.write_if(weight > 0.0, p, key, cover, p == spot.pixel);
-        }
-    }
-
-    /// A soft cone of solid angle `spot.omega` around `spot.w`; `delta` is
-    /// the angular size of a pixel there (the narrowest rim).
-    #[inline(always)]
-    fn splat_cone(&mut self, spot: &Spot, key: u64, delta: f32) {
-        // With chord radius `a` and rim width `s` (coverage 1/2 at `a`), the
-        // coverage integrates to `π(a² + s²/12)`; solve for `a`.
-        let cap = spot.omega * std::f32::consts::FRAC_1_PI;
-        let k = CONE_SOFTNESS;
-        let soft2 = k * k / 12.0;
-        let mut a2 = cap / (1.0 + soft2);
-        let mut s = k * a2.sqrt();
-        if s < delta {
-            s = delta;
-            a2 = (cap - delta * delta / 12.0).max(0.0);
-        }
-        let a = a2.min(4.0).sqrt();
-        let (inner, outer) = ((a - 0.5 * s).max(0.0), a + 0.5 * s);
-        let (inner2, outer2, inv_s) = (inner * inner, outer * outer, 1.0 / s);
-        // The angle of chord `outer`: `2·asin(outer/2)`.
-        let angle = chord_angle_bound(outer);
-        let (c0, c1, r0, r1) = self.table.footprint(spot.x, spot.y, spot.pixel, angle);
-        let cone = Cone {
-            w: spot.w,
-            a,
-            inv_s,
-            inner2,
-            outer2,
-        };
-        let n = self.table.n;
-        for r in r0..=r1 {
-            for c in c0..=c1 {
-                let p = r * n + c;
-                let t = &self.table;
-                let (m, cover) = cone.cover(t.dir_x[p], t.dir_y[p], t.dir_z[p]);
-                if m {
-                    self.write(p, key, cover, 0.5 <= cover);
-                }
-            }
-        }
-    }
-
-    /// Disk rasterization of a leaf (ray-disk hits at pixel centres, an
-    /// anti-aliased rim); false if it covers no pixel centre.
-    #[inline(always)]
-    fn splat_disk(&mut self, node: NodeId, rec: &SplatRecord, spot: &Spot) -> bool {
-        let r2 = rec.area * std::f32::consts::FRAC_1_PI * (DISK_INFLATION * DISK_INFLATION);
-        let r = r2.sqrt();
-        let m = self.to_local(Vec3::from_array(rec.normal));
-        let c = self.to_local(Vec3::from_array(rec.center) - self.position);
-        let (c0, c1, r0, r1) = if r >= spot.d {
-            (0, self.table.n - 1, 0, self.table.n - 1)
-        } else {
-            // The edge ramp reaches half a pixel past the rim.
-            let angle = sine_angle_bound(r / spot.d) + 0.5 * self.table.pixel_angle + 1e-3;
-            self.table.footprint(spot.x, spot.y, spot.pixel, angle)
-        };
-        let disk = Disk {
-            m,
-            mc: m.dot(c),
-            c,
-            r,
-        };
-        let n = self.table.n;
-        let mut any_hit = false;
-        for row in r0..=r1 {
-            for col in c0..=c1 {
-                let p = row * n + col;
-                let t = &self.table;
-                let (hit, depth, cover) = disk.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
-                if hit {
-                    self.write(p, key(depth, node), cover, 0.5 <= cover);
-                    any_hit = true;
-                }
-            }
-        }
-        any_hit
     }
 
     /// The weight of pixel `p` in the convolution (`coverage·∫cosθ dω`, 0
@@ -726,6 +440,13 @@ impl MicroBuffer {
     /// in order at the end: the order of the 16-lane convolution, so both
     /// give the same bits.
     pub fn irradiance(&self, tree: &Tree) -> Vec3 {
+        self.irradiance_inline(tree)
+    }
+
+    /// [`irradiance`](Self::irradiance), inlined into the caller (a clone of
+    /// the scalar pipeline compiles it with its own instruction set).
+    #[inline(always)]
+    pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
         let mut acc = [[0.0f32; LANES]; 3];
         for p in 0..self.table.cos_weight.len() {
             let (w, k) = self.weight(p);
@@ -767,6 +488,12 @@ impl MicroBuffer {
     /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1], summed like
     /// [`irradiance`](Self::irradiance).
     pub fn occlusion(&self) -> f32 {
+        self.occlusion_inline()
+    }
+
+    /// [`occlusion`](Self::occlusion), inlined into the caller.
+    #[inline(always)]
+    pub(crate) fn occlusion_inline(&self) -> f32 {
         let mut acc = [0.0f32; LANES];
         for p in 0..self.table.cos_weight.len() {
             acc[p % LANES] += self.weight(p).0;
@@ -784,9 +511,9 @@ pub struct MicroBufferSink<'a> {
 }
 
 impl CutSink for MicroBufferSink<'_> {
-    #[inline]
+    #[inline(always)]
     fn splat(&mut self, receiver: usize, node: NodeId) {
-        self.buffers[receiver].splat(self.tree, node);
+        self.buffers[receiver].splat_inline(self.tree, node);
     }
 }
 
@@ -877,8 +604,12 @@ mod tests {
             let mut mb = MicroBuffer::new(n).unwrap();
             mb.reset(Vec3::ZERO, Vec3::Z);
             for (p, d) in mb.table.dir.clone().iter().enumerate() {
-                let s = mb.locate(&record(*d)).expect("upper hemisphere");
-                assert_eq!(s.pixel, p, "n {n} pixel {p} dir {d}");
+                let l = mb.locate(&record(*d)).expect("upper hemisphere");
+                assert_eq!(
+                    splat::pixel_of(&mb.table, l.x, l.y),
+                    p as f32,
+                    "n {n} pixel {p} dir {d}"
+                );
             }
         }
     }
@@ -890,9 +621,11 @@ mod tests {
         mb.reset(Vec3::ZERO, Vec3::Z);
         let t = mb.table.clone();
         for (i, w) in t.dir.iter().enumerate().step_by(3) {
-            let s = mb.locate(&record(*w)).unwrap();
+            let l = mb.locate(&record(*w)).unwrap();
+            let pixel = splat::pixel_of(&t, l.x, l.y);
             for angle in [0.05f32, 0.2, 0.5, 1.0] {
-                let (c0, c1, r0, r1) = t.footprint(s.x, s.y, s.pixel, angle);
+                let b = splat::footprint(&t, l.x, l.y, pixel, angle);
+                let (c0, c1, r0, r1) = (b.c0 as usize, b.c1 as usize, b.r0 as usize, b.r1 as usize);
                 for (p, d) in t.dir.iter().enumerate() {
                     if d.dot(*w).clamp(-1.0, 1.0).acos() < angle * 0.999 {
                         let (c, r) = (p % n, p / n);

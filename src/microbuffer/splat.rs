@@ -1,0 +1,366 @@
+//! Drawing one splat. A located splat ([`Located`](super::lanes::Located))
+//! is drawn one of three ways:
+//!
+//! * smaller than the pixel its centre falls in (`Ω < ΔΩ`): spread over the
+//!   2×2 pixels around the centre with bilinear weights, each covered by its
+//!   weight times `Ω/ΔΩ` ([`plan_small`]);
+//! * a larger cluster: a soft cone ([`plan_cone`]);
+//! * a larger leaf: its disk, ray-traced at the pixel centres of a box
+//!   ([`plan_disk`]); a leaf covering no pixel centre is spread like a small
+//!   splat with `Ω` capped at `ΔΩ`.
+//!
+//! Everything up to the pixel loop — class, bilinear corners and weights,
+//! cone and disk parameters, footprint boxes — is written once over lanes
+//! ([`Real`]), so the 16-lane pipeline computes it for a whole packet in
+//! vector code and the scalar pipeline for one receiver, with the same
+//! operations; only the read-modify-write of pixels is per receiver.
+
+use glam::Vec3;
+
+use super::lanes::{FrameLanes, Located, NodeSplat};
+use super::{COVER_CAP, COVER_ONE, MicroBuffer, NEAR, NO_KEY, Table, key};
+use crate::cut::node_test::Real;
+use crate::tree::{NodeId, SplatRecord};
+
+/// Leaf disks are rasterized this much larger than their radius, so that
+/// the disks of a surface overlap instead of leaving holes between them.
+const DISK_INFLATION: f32 = 1.2;
+
+/// Width of a cluster's coverage ramp, relative to its radius.
+const CONE_SOFTNESS: f32 = 1.0;
+
+/// An upper bound of `asin(x)` for `x ∈ [0, 1]` (footprint boxes need a
+/// bound, not the angle): `asin` is convex there, so below the chord
+/// through `(0, 0)` and `(½, π/6)` up to ½, and through `(½, π/6)` and `(1, π/2)` above.
+#[inline(always)]
+fn sine_angle_bound<V: Real>(x: V) -> V {
+    const A: f32 = std::f32::consts::FRAC_PI_3 * 1.0001; // (π/6)/½
+    const B: f32 = (std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_6) * 2.0 * 1.0001;
+    let half = V::splat(0.5);
+    let above = V::splat(std::f32::consts::FRAC_PI_6 * 1.0001) + V::splat(B) * (x - half);
+    V::select(x.le(half), V::splat(A) * x, above)
+}
+
+/// An upper bound of the angle `2·asin(c/2)` of chord `c ∈ [0, 2]`.
+#[inline(always)]
+fn chord_angle_bound<V: Real>(c: V) -> V {
+    V::splat(2.0) * sine_angle_bound((V::splat(0.5) * c).min_of(V::splat(1.0)))
+}
+
+/// The pixel `r·N + c` that continuous coordinates `(x, y)` fall in, as a
+/// whole-number float (a NaN or negative coordinate goes to 0).
+#[inline(always)]
+pub(crate) fn pixel_of<V: Real>(t: &Table, x: V, y: V) -> V {
+    let (zero, last) = (V::splat(0.0), V::splat((t.n - 1) as f32));
+    let c = x.max_of(zero).floor().min_of(last);
+    let r = y.max_of(zero).floor().min_of(last);
+    r * V::splat(t.n as f32) + c
+}
+
+/// Columns `c0..=c1` and rows `r0..=r1` of pixels, as whole-number floats.
+#[derive(Clone, Copy)]
+pub(crate) struct PixelBox<V> {
+    pub c0: V,
+    pub c1: V,
+    pub r0: V,
+    pub r1: V,
+}
+
+impl PixelBox<f32> {
+    /// Pixel indices `(c0, c1, r0, r1)`.
+    #[inline(always)]
+    fn bounds(&self) -> (usize, usize, usize, usize) {
+        (
+            self.c0 as usize,
+            self.c1 as usize,
+            self.r0 as usize,
+            self.r1 as usize,
+        )
+    }
+}
+
+/// The pixels whose centres may lie within angle `angle` of the direction
+/// at `(x, y)` in pixel `pixel`: `angle` times the map's reach there (or
+/// anywhere, for a wide footprint), clamped to the grid.
+#[inline(always)]
+pub(crate) fn footprint<V: Real>(t: &Table, x: V, y: V, pixel: V, angle: V) -> PixelBox<V> {
+    let near = angle * V::gather(&t.reach, pixel);
+    let h = V::select(
+        near.le(V::splat(NEAR as f32)),
+        near,
+        angle * V::splat(t.reach_max),
+    ) + V::splat(0.01);
+    let (zero, half, last) = (V::splat(0.0), V::splat(0.5), V::splat((t.n - 1) as f32));
+    // Pixel c's centre is c + ½.
+    PixelBox {
+        c0: (x - h - half).ceil().max_of(zero).min_of(last),
+        c1: (x + h - half).floor().max_of(zero).min_of(last),
+        r0: (y - h - half).ceil().max_of(zero).min_of(last),
+        r1: (y + h - half).floor().max_of(zero).min_of(last),
+    }
+}
+
+/// A splat spread over the 2×2 pixels around its centre: pixels, bilinear
+/// weights, and the coverage of each.
+#[derive(Clone, Copy)]
+pub(crate) struct SmallPlan<V> {
+    pub p: [V; 4],
+    pub w: [V; 4],
+    pub cover: [V; 4],
+}
+
+/// Spreads solid angle `omega` at `(x, y)` over the 2×2 pixels around it
+/// (bilinear weights between pixel centres, clamped into the grid).
+#[inline(always)]
+pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega: V) -> SmallPlan<V> {
+    let (zero, half, one) = (V::splat(0.0), V::splat(0.5), V::splat(1.0));
+    let (n, last) = (V::splat(t.n as f32), V::splat((t.n - 1) as f32));
+    let (gx, gy) = (x - half, y - half);
+    let (x0, y0) = (gx.floor(), gy.floor());
+    let (tx, ty) = (gx - x0, gy - y0);
+    let (c0, c1) = (x0.max_of(zero).min_of(last), (x0 + one).max_of(zero).min_of(last));
+    let (r0, r1) = (y0.max_of(zero).min_of(last), (y0 + one).max_of(zero).min_of(last));
+    let p = [r0 * n + c0, r0 * n + c1, r1 * n + c0, r1 * n + c1];
+    let w = [(one - tx) * (one - ty), tx * (one - ty), (one - tx) * ty, tx * ty];
+    // Written out: a closure passed to `map` may be left out of line, and
+    // then compiled for the baseline target rather than the caller's clone.
+    let sa = &t.solid_angle;
+    let cover = [
+        w[0] * (omega / V::gather(sa, p[0])),
+        w[1] * (omega / V::gather(sa, p[1])),
+        w[2] * (omega / V::gather(sa, p[2])),
+        w[3] * (omega / V::gather(sa, p[3])),
+    ];
+    SmallPlan { p, w, cover }
+}
+
+/// A cluster's soft cone: chord radius `a` where coverage is ½, ramp `1/s`,
+/// full inside chord² `inner2`, none from `outer2`, over the box `bx`.
+#[derive(Clone, Copy)]
+pub(crate) struct ConePlan<V> {
+    pub a: V,
+    pub inv_s: V,
+    pub inner2: V,
+    pub outer2: V,
+    pub bx: PixelBox<V>,
+}
+
+/// A soft cone of solid angle `omega` around the direction at `(x, y)`:
+/// coverage 1 in the middle, falling linearly across a rim as wide as the
+/// cone's radius (at least a pixel: `delta`, the angular size of the pixel
+/// there, or the largest pixel's for a centre below the horizon), scaled so
+/// that it integrates to `Ω`. Radii are chords `|u − ω|`, for which a cap's
+/// solid angle is exactly `π·chord²`.
+#[inline(always)]
+pub(crate) fn plan_cone<V: Real>(t: &Table, x: V, y: V, pixel: V, omega: V, visible: V::Mask) -> ConePlan<V> {
+    let (zero, half, one) = (V::splat(0.0), V::splat(0.5), V::splat(1.0));
+    let delta = V::select(visible, V::gather(&t.pixel_size, pixel), V::splat(t.pixel_angle));
+    // With chord radius `a` and rim width `s` (coverage ½ at `a`), the
+    // coverage integrates to `π(a² + s²/12)`; solve for `a`.
+    let cap = omega * V::splat(std::f32::consts::FRAC_1_PI);
+    let k = CONE_SOFTNESS;
+    let a2 = cap / V::splat(1.0 + k * k / 12.0);
+    let s = V::splat(k) * a2.sqrt();
+    let narrow = s.lt(delta);
+    let s = V::select(narrow, delta, s);
+    let a2 = V::select(narrow, (cap - delta * delta / V::splat(12.0)).max_of(zero), a2);
+    let a = a2.min_of(V::splat(4.0)).sqrt();
+    let (inner, outer) = ((a - half * s).max_of(zero), a + half * s);
+    ConePlan {
+        a,
+        inv_s: one / s,
+        inner2: inner * inner,
+        outer2: outer * outer,
+        bx: footprint(t, x, y, pixel, chord_angle_bound(outer)),
+    }
+}
+
+/// A leaf's disk in the receiver's frame: normal `m`, centre `c`, `m·c`,
+/// radius `r`, and the box of pixels it may cover.
+#[derive(Clone, Copy)]
+pub(crate) struct DiskPlan<V> {
+    pub m: [V; 3],
+    pub c: [V; 3],
+    pub mc: V,
+    pub r: V,
+    pub bx: PixelBox<V>,
+}
+
+/// The disk of leaf `s` (radius inflated by [`DISK_INFLATION`]) seen from
+/// receiver `f`, its centre at `(x, y)` in pixel `pixel` and distance `d`.
+#[inline(always)]
+pub(crate) fn plan_disk<V: Real>(
+    t: &Table,
+    f: &FrameLanes<V>,
+    s: &NodeSplat<V>,
+    x: V,
+    y: V,
+    pixel: V,
+    d: V,
+) -> DiskPlan<V> {
+    let r2 = s.area * V::splat(std::f32::consts::FRAC_1_PI) * V::splat(DISK_INFLATION * DISK_INFLATION);
+    let r = r2.sqrt();
+    let m = [
+        s.nx * f.tx + s.ny * f.ty + s.nz * f.tz,
+        s.nx * f.bx + s.ny * f.by + s.nz * f.bz,
+        s.nx * f.nx + s.ny * f.ny + s.nz * f.nz,
+    ];
+    let (vx, vy, vz) = (s.cx - f.px, s.cy - f.py, s.cz - f.pz);
+    let c = [
+        vx * f.tx + vy * f.ty + vz * f.tz,
+        vx * f.bx + vy * f.by + vz * f.bz,
+        vx * f.nx + vy * f.ny + vz * f.nz,
+    ];
+    let mc = m[0] * c[0] + m[1] * c[1] + m[2] * c[2];
+    // The edge ramp reaches half a pixel past the rim; a disk reaching the
+    // receiver may cover any pixel.
+    let angle = sine_angle_bound(r / d) + V::splat(0.5 * t.pixel_angle + 1e-3);
+    let near = footprint(t, x, y, pixel, angle);
+    let whole = d.le(r);
+    let (zero, last) = (V::splat(0.0), V::splat((t.n - 1) as f32));
+    DiskPlan {
+        m,
+        c,
+        mc,
+        r,
+        bx: PixelBox {
+            c0: V::select(whole, zero, near.c0),
+            c1: V::select(whole, last, near.c1),
+            r0: V::select(whole, zero, near.r0),
+            r1: V::select(whole, last, near.r1),
+        },
+    }
+}
+
+impl ConePlan<f32> {
+    /// Whether the cone around `w` covers the pixel of centre direction
+    /// `u`, and by how much.
+    #[inline(always)]
+    fn cover(&self, w: Vec3, ux: f32, uy: f32, uz: f32) -> (bool, f32) {
+        let (ex, ey, ez) = (ux - w.x, uy - w.y, uz - w.z);
+        let c2 = ex * ex + ey * ey + ez * ez;
+        let ramp = (0.5 + (self.a - c2.sqrt()) * self.inv_s).min_of(1.0);
+        let cover = f32::select(c2.le(self.inner2), 1.0, ramp);
+        (c2 < self.outer2 && 0.0 < cover, cover)
+    }
+}
+
+impl DiskPlan<f32> {
+    /// Whether the ray of direction `u` from the receiver hits the disk's
+    /// front, at what distance, and the pixel's coverage: the disk's edge is
+    /// a ramp one pixel (angular size `delta`) wide at the hit distance, so a
+    /// disk over a few pixels still shows its true area on average.
+    #[inline(always)]
+    fn hit(&self, ux: f32, uy: f32, uz: f32, delta: f32) -> (bool, f32, f32) {
+        let [mx, my, mz] = self.m;
+        let denom = mx * ux + my * uy + mz * uz;
+        let t = self.mc / denom;
+        let ex = ux * t - self.c[0];
+        let ey = uy * t - self.c[1];
+        let ez = uz * t - self.c[2];
+        let e = (ex * ex + ey * ey + ez * ez).sqrt();
+        let cover = (0.5 + (self.r - e) / (delta * t)).min_of(1.0);
+        (denom < 0.0 && 0.0 < t && 0.0 < cover, t, cover)
+    }
+}
+
+impl MicroBuffer {
+    /// Adds a splat of `key` covering the fraction `coverage` ∈ [0, 1] of pixel `p`.
+    #[inline(always)]
+    fn write(&mut self, p: usize, key: u64, coverage: f32, owns: bool) {
+        debug_assert!(coverage >= 0.0, "coverage {coverage}");
+        let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
+        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
+        self.any[p] = self.any[p].min(key);
+        if owns {
+            self.own[p] = self.own[p].min(key);
+        }
+    }
+
+    /// [`write`](Self::write) where `m`, else nothing, without a branch:
+    /// whether a corner gets weight is data the branch predictor cannot learn.
+    #[inline(always)]
+    fn write_if(&mut self, m: bool, p: usize, key: u64, coverage: f32, owns: bool) {
+        let c = (f32::select(m, coverage, 0.0).min_of(1.0) * COVER_ONE) as u32;
+        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
+        let key = if m { key } else { NO_KEY };
+        self.any[p] = self.any[p].min(key);
+        let own_key = if owns { key } else { NO_KEY };
+        self.own[p] = self.own[p].min(own_key);
+    }
+
+    /// Draws a small splat; it owns the pixel its centre falls in.
+    #[inline(always)]
+    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64, pixel: f32) {
+        for k in 0..4 {
+            let p = plan.p[k];
+            self.write_if(plan.w[k] > 0.0, p as usize, key, plan.cover[k], p == pixel);
+        }
+    }
+
+    /// Draws a cone around local direction `w`; it owns the pixels it covers
+    /// by at least one half.
+    #[inline(always)]
+    pub(crate) fn draw_cone(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
+        let (c0, c1, r0, r1) = plan.bx.bounds();
+        let n = self.table.n;
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let p = r * n + c;
+                let t = &self.table;
+                let (m, cover) = plan.cover(w, t.dir_x[p], t.dir_y[p], t.dir_z[p]);
+                if m {
+                    self.write(p, key, cover, 0.5 <= cover);
+                }
+            }
+        }
+    }
+
+    /// Draws a leaf's disk (depth: the hit distance); false if it covers no
+    /// pixel centre.
+    #[inline(always)]
+    pub(crate) fn draw_disk(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
+        let (c0, c1, r0, r1) = plan.bx.bounds();
+        let n = self.table.n;
+        let mut any_hit = false;
+        for row in r0..=r1 {
+            for col in c0..=c1 {
+                let p = row * n + col;
+                let t = &self.table;
+                let (hit, depth, cover) = plan.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
+                if hit {
+                    self.write(p, key(depth, node), cover, 0.5 <= cover);
+                    any_hit = true;
+                }
+            }
+        }
+        any_hit
+    }
+
+    /// Draws node `node` (record `rec`) located at `l`: the scalar pipeline,
+    /// which works out only what the splat's class needs.
+    #[inline(always)]
+    pub(crate) fn apply(&mut self, rec: &SplatRecord, node: NodeId, l: &Located<f32>) {
+        let t = &*self.table;
+        let pixel = pixel_of(t, l.x, l.y);
+        let visible = 0.0 < l.wz;
+        let pixel_omega = f32::gather(&t.solid_angle, pixel);
+        let key = key(l.d, node);
+        if visible && l.omega < pixel_omega {
+            let plan = plan_small(t, l.x, l.y, l.omega);
+            self.draw_small(&plan, key, pixel);
+        } else if rec.leaf != 0 {
+            let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
+            // `Ω` is a far-field estimate that blows up for a disk nearly in
+            // the receiver's plane: a leaf missing every centre gets a pixel at most.
+            if !self.draw_disk(&plan, node) && visible {
+                let t = &*self.table;
+                let plan = plan_small(t, l.x, l.y, pixel_omega);
+                self.draw_small(&plan, key, pixel);
+            }
+        } else {
+            let plan = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
+            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key);
+        }
+    }
+}
