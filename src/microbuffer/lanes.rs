@@ -13,7 +13,7 @@
 //! every instruction-set path like the traversal kernels, and run on the
 //! path they are given.
 
-use std::simd::prelude::*;
+use std::simd::{Select, prelude::*};
 
 use glam::Vec3;
 
