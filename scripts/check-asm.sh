@@ -98,6 +98,13 @@ for family in traversal shading scalar-shading; do
         label="$family $isa"
         n=$(bodies "$sym" | grep -c '^[0-9a-f]* <' || true)
         lines=$(bodies "$sym" | wc -l)
+        if [ "$lines" -lt 10 ] && [ "$arch" = aarch64 ] && [ "$family" = scalar-shading ] && [ "$isa" = neon ]; then
+            # NEON is aarch64's baseline: the scalar pipeline's NEON clone is
+            # the portable one instruction for instruction, and LLVM merges
+            # identical functions.
+            echo "  ok    $label      merged with the portable clone (NEON is the aarch64 baseline)"
+            continue
+        fi
         if [ "$lines" -lt 10 ]; then
             echo "  FAIL  no instance of $sym in $bin (inlined or renamed?)"
             fail=1
