@@ -93,8 +93,8 @@ pub mod trace;
 pub mod tree;
 
 pub use cut::{
-    Cut, CutOptions, CutRecorder, CutSink, Isa, LANES, Outcome, Receiver, Scheme, SplatCounter, Traversal,
-    TraversalStats,
+    AUTO_SINGLE_BELOW, Cut, CutOptions, CutRecorder, CutSink, Isa, LANES, Outcome, Receiver, Scheme,
+    SplatCounter, Traversal, TraversalStats, auto_scheme,
 };
 pub use error::{Error, Invalid};
 pub use points::{PointCloud, Surfel};

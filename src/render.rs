@@ -3,6 +3,7 @@
 //! cuts, the microbuffer splats and convolves them, direct light comes from
 //! shadow rays. Stages a scene does not need are left out, and said so.
 
+use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -10,7 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::brdf::GlossyLobe;
-use crate::cut::{CutOptions, CutSink, Isa, LANES, Receiver, Scheme, Traversal, TraversalStats};
+use crate::cut::{CutOptions, CutSink, Isa, LANES, Receiver, Scheme, Traversal, TraversalStats, auto_scheme};
 use crate::error::Error;
 use crate::light::Lights;
 use crate::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
@@ -24,8 +25,7 @@ use crate::tree::{NodeId, Tree};
 /// Which scheme the renderer runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SchemeChoice {
-    /// Packet for smooth diffuse scenes, hybrid where glossy lobes or bumps
-    /// break packet coherence.
+    /// Per packet, [`auto_scheme`]: packet, single for sparse packets.
     Auto,
     /// A named scheme.
     Fixed(Scheme),
@@ -58,6 +58,15 @@ pub struct RenderOptions {
     pub isa: Option<Isa>,
     /// Seed of every random choice.
     pub seed: u64,
+}
+
+impl fmt::Display for SchemeChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SchemeChoice::Auto => f.write_str("auto"),
+            SchemeChoice::Fixed(s) => s.fmt(f),
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -142,8 +151,10 @@ pub struct RenderOutput {
     pub timings: Timings,
     /// Traversal counters over all receivers.
     pub stats: TraversalStats,
-    /// The scheme that ran.
+    /// The scheme that ran (on full packets, under `auto`).
     pub scheme: Scheme,
+    /// The choice it came from.
+    pub choice: SchemeChoice,
     /// The instruction-set path that ran.
     pub isa: Isa,
     /// Surfels in the cloud (0 when none was needed).
@@ -373,8 +384,7 @@ impl<'s> Frame<'s> {
         let needs_points = opts.ao || opts.bounces > 0;
         let scheme = match opts.scheme {
             SchemeChoice::Fixed(s) => s,
-            SchemeChoice::Auto if scene.has_glossy() || scene.has_bump() => Scheme::Hybrid,
-            SchemeChoice::Auto => Scheme::Packet,
+            SchemeChoice::Auto => auto_scheme(LANES),
         };
 
         let t_pre = Instant::now();
@@ -454,9 +464,17 @@ impl<'s> Frame<'s> {
         self.pre
     }
 
-    /// The scheme `opts.scheme` resolved to.
+    /// The scheme `opts.scheme` resolved to for a full packet.
     pub fn scheme(&self) -> Scheme {
         self.scheme
+    }
+
+    /// The scheme for a packet of `receivers` receivers.
+    pub(crate) fn scheme_for(&self, receivers: usize) -> Scheme {
+        match self.opts.scheme {
+            SchemeChoice::Auto => auto_scheme(receivers),
+            SchemeChoice::Fixed(s) => s,
+        }
     }
 
     /// The traversal with this frame's options and `scheme`'s needs.
@@ -632,7 +650,8 @@ impl<'s> Frame<'s> {
                     if self.needs_points && !points.is_empty() {
                         let receivers = Self::receivers(&points)?;
                         let t1 = Instant::now();
-                        stats.merge(&cuts.run(&traversal, self.scheme, &receivers));
+                        let scheme = self.scheme_for(receivers.len());
+                        stats.merge(&cuts.run(&traversal, scheme, &receivers));
                         let t2 = Instant::now();
                         acc_trav.add((t2 - t1).as_secs_f64());
                         indirect = self.shade(&points, &mut cuts, &mut bufs, traversal.isa());
@@ -679,6 +698,7 @@ impl<'s> Frame<'s> {
             },
             stats,
             scheme: self.scheme,
+            choice: self.opts.scheme,
             isa: traversal.isa(),
             surfels: self.surfels,
             receivers,

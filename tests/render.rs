@@ -67,6 +67,25 @@ fn images_of_every_scheme_and_path_are_bit_identical() {
 }
 
 #[test]
+fn auto_with_sparse_edge_packets_gives_the_scalar_image() {
+    // 26×22 pixels: edge tiles hold 8 receivers, the corner tile 4, which
+    // `auto` cuts with single; full tiles with packet.
+    let mut scene = small(cornell_box());
+    scene.camera.width = 26;
+    scene.camera.height = 22;
+    let reference = render(&scene, &opts(Scheme::Scalar, Isa::Portable), &|_, _| {}).unwrap();
+    for isa in Isa::available() {
+        let auto = RenderOptions {
+            scheme: SchemeChoice::Auto,
+            ..opts(Scheme::Scalar, isa)
+        };
+        let out = render(&scene, &auto, &|_, _| {}).unwrap();
+        assert_eq!(bits(&out.image), bits(&reference.image), "auto on {isa}");
+        assert_eq!(out.stats.node_tests, reference.stats.node_tests);
+    }
+}
+
+#[test]
 fn stages_left_out_say_why() {
     let scene = small(cornell_box());
     let direct_only = render(
@@ -113,10 +132,20 @@ fn stages_left_out_say_why() {
     )
     .unwrap();
     assert_eq!(
-        g.scheme,
-        Scheme::Hybrid,
-        "auto picks hybrid where glossy lobes and bumps break coherence"
+        (g.scheme, g.choice),
+        (Scheme::Packet, SchemeChoice::Auto),
+        "auto runs packet on full packets, glossy and bumped scenes too (measured fastest)"
     );
+    assert!(
+        g.stages
+            .iter()
+            .any(|s| s.name == "hybrid packet→single switching" && s.skipped.is_some())
+    );
+    // Sparse packets run single, full ones packet.
+    assert_eq!(pbgi::auto_scheme(1), Scheme::Single);
+    assert_eq!(pbgi::auto_scheme(pbgi::AUTO_SINGLE_BELOW - 1), Scheme::Single);
+    assert_eq!(pbgi::auto_scheme(pbgi::AUTO_SINGLE_BELOW), Scheme::Packet);
+    assert_eq!(pbgi::auto_scheme(pbgi::LANES), Scheme::Packet);
     assert!(
         g.stages
             .iter()

@@ -42,8 +42,12 @@ struct BenchArgs {
     /// One JSON object per (scene, scheme) on stdout instead of the table.
     #[arg(long)]
     json: bool,
-    /// Schemes to time (comma-separated); the scalar reference always runs.
-    #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
+    /// Schemes to time (comma-separated; auto: the renderer's per-packet choice); the scalar reference always runs.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "scalar,single,packet,hybrid,auto"
+    )]
     schemes: Vec<String>,
     /// Rounds over the schemes; each time is the fastest of its rounds.
     #[arg(long, default_value_t = 1)]
@@ -144,6 +148,20 @@ impl Settings {
 
 fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
     names.iter().map(|n| Ok(n.trim().parse::<Scheme>()?)).collect()
+}
+
+/// Scheme names, `auto` included.
+fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
+    names
+        .iter()
+        .map(|n| {
+            Ok(if n.trim().eq_ignore_ascii_case("auto") {
+                SchemeChoice::Auto
+            } else {
+                SchemeChoice::Fixed(n.trim().parse::<Scheme>()?)
+            })
+        })
+        .collect()
 }
 
 /// SCENE's help: the names (see `pbgi scenes` for which are present).
@@ -434,7 +452,18 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
     );
     println!(
         "scheme {} on {}, Ω {}, microbuffer {}, {} thread(s)",
-        out.scheme, out.isa, opts.max_solid_angle, opts.microbuffer, threads
+        match out.choice {
+            SchemeChoice::Auto => format!(
+                "auto ({}; single for packets under {} receivers)",
+                out.scheme,
+                pbgi::AUTO_SINGLE_BELOW
+            ),
+            SchemeChoice::Fixed(s) => s.to_string(),
+        },
+        out.isa,
+        opts.max_solid_angle,
+        opts.microbuffer,
+        threads
     );
     if out.surfels > 0 {
         println!(
@@ -473,16 +502,13 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
 
 fn cmd_bench(a: &BenchArgs) -> Res<()> {
     let scenes = if a.scenes.is_empty() {
-        pbgi::scene::builtin::NAMES
-            .iter()
-            .map(|s| s.to_string())
-            .collect()
+        pbgi::scene::available_scenes()
     } else {
         a.scenes.clone()
     };
     let opts = BenchOptions {
         render: a.settings.options(a.spp)?,
-        schemes: parse_schemes(&a.schemes)?,
+        schemes: parse_choices(&a.schemes)?,
         rounds: a.rounds,
     };
     let pool = thread_pool(Some(a.threads))?;
@@ -535,7 +561,7 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
     for r in rows {
         println!(
             "  {:<7} {:>8.3} {:>10.3} {:>8.2}× {:>8.3} {:>7} {:>10.0} {:>11.0} {:>9.3}",
-            r.scheme.name(),
+            r.scheme.to_string(),
             r.pre_s,
             r.trav_s,
             r.speedup_vs_scalar,

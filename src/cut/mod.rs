@@ -285,6 +285,27 @@ impl fmt::Display for Scheme {
     }
 }
 
+/// Packets of fewer receivers than this run [`Scheme::Single`] under
+/// [`auto_scheme`]. Packet costs about as much per node step with one active
+/// lane as with sixteen (≈3.5 scalar node tests, from its 4.3–4.9× speed-up
+/// at ~85 % lane use), single ≈0.5 per receiver and node: below about six
+/// receivers one at a time is cheaper.
+pub const AUTO_SINGLE_BELOW: usize = 6;
+
+/// The scheme the `auto` choice runs on one packet of `receivers` receivers:
+/// [`Scheme::Packet`], the fastest on every scene measured (BENCHMARKS.md,
+/// the glossy and bump ones included, where hybrid's switching cost more than
+/// it saved), and [`Scheme::Single`] for packets too sparse to fill lanes
+/// (tiles at the image's edge or at silhouettes against the background).
+/// Every scheme gives the same cut, so the choice changes only the time.
+pub fn auto_scheme(receivers: usize) -> Scheme {
+    if receivers < AUTO_SINGLE_BELOW {
+        Scheme::Single
+    } else {
+        Scheme::Packet
+    }
+}
+
 impl FromStr for Scheme {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self, Error> {

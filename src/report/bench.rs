@@ -13,9 +13,9 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::cut::LANES;
-use crate::cut::{CutSink, Isa, Scheme, TraversalStats};
+use crate::cut::{CutSink, Isa, Scheme, TraversalStats, auto_scheme};
 use crate::microbuffer::MicroBuffer;
-use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions};
+use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions, SchemeChoice};
 use crate::scene::Scene;
 use crate::tree::NodeId;
 
@@ -25,8 +25,9 @@ pub struct BenchOptions {
     /// The render settings (Ω, microbuffer, density, camera samples, ISA…);
     /// its `scheme` is ignored: every scheme of `schemes` runs.
     pub render: RenderOptions,
-    /// The schemes to time; the scalar reference is always timed (first).
-    pub schemes: Vec<Scheme>,
+    /// The schemes to time (`Auto`: the renderer's per-packet choice); the
+    /// scalar reference is always timed (first).
+    pub schemes: Vec<SchemeChoice>,
     /// Rounds over the schemes; each figure is the fastest of its rounds.
     pub rounds: u32,
 }
@@ -38,7 +39,11 @@ impl Default for BenchOptions {
                 spp: 1,
                 ..RenderOptions::default()
             },
-            schemes: Scheme::ALL.to_vec(),
+            schemes: Scheme::ALL
+                .into_iter()
+                .map(SchemeChoice::Fixed)
+                .chain([SchemeChoice::Auto])
+                .collect(),
             rounds: 1,
         }
     }
@@ -49,8 +54,8 @@ impl Default for BenchOptions {
 pub struct BenchRow {
     /// Scene name.
     pub scene: String,
-    /// Traversal scheme.
-    pub scheme: Scheme,
+    /// Traversal scheme (`auto`: per packet, as the renderer chooses).
+    pub scheme: SchemeChoice,
     /// Instruction-set path it ran on.
     pub isa: Isa,
     /// Worker threads.
@@ -168,8 +173,9 @@ pub fn bench(
     opts: &BenchOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<BenchRow>, RenderError> {
-    let mut schemes = vec![Scheme::Scalar];
-    schemes.extend(opts.schemes.iter().copied().filter(|&s| s != Scheme::Scalar));
+    let scalar = SchemeChoice::Fixed(Scheme::Scalar);
+    let mut schemes = vec![scalar];
+    schemes.extend(opts.schemes.iter().copied().filter(|&s| s != scalar));
     let rounds = opts.rounds.max(1) as usize;
     let passes = rounds * schemes.len() + 1;
     progress(0, passes);
@@ -209,7 +215,7 @@ pub fn bench(
     let mut best = vec![f64::INFINITY; schemes.len()];
     let mut results: Vec<Option<(TraversalStats, u64, u64)>> = vec![None; schemes.len()];
     for _ in 0..rounds {
-        for (i, &scheme) in schemes.iter().enumerate() {
+        for (i, &choice) in schemes.iter().enumerate() {
             let t0 = Instant::now();
             let (stats, digest, splats) = packets
                 .par_iter()
@@ -217,6 +223,10 @@ pub fn bench(
                     let mut sink = CutDigest {
                         sums: [0; 16],
                         splats: 0,
+                    };
+                    let scheme = match choice {
+                        SchemeChoice::Fixed(s) => s,
+                        SchemeChoice::Auto => auto_scheme(p.receivers.len()),
                     };
                     let stats = traversal.run(scheme, &p.receivers, &mut sink);
                     let digest = sink.sums[..p.receivers.len()]
@@ -297,11 +307,7 @@ pub fn bench(
                 receivers,
                 pre_s: frame.pre_seconds(),
                 trav_s: best[i],
-                others_s: if scheme == Scheme::Scalar {
-                    others[0]
-                } else {
-                    others[1]
-                },
+                others_s: if scheme == scalar { others[0] } else { others[1] },
                 speedup_vs_scalar: scalar_trav / best[i],
                 lane_utilization: stats.lane_utilization(),
                 nodes_per_receiver: stats.nodes_per_receiver(),
