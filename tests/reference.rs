@@ -169,3 +169,16 @@ fn point_based_and_path_traced_cornell_boxes_agree() {
     assert!((a - b).abs() < 0.1 * b, "point-based mean {a} vs path traced {b}");
     eprintln!("Cornell box 16×16: relative RMSE {:.3}", rmse(&pb, &truth) / b);
 }
+
+#[test]
+fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cornell-box/error.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let (scene, points) = pbgi::report::from_csv(&text).unwrap();
+    assert_eq!(scene, "cornell-box");
+    assert!(points.len() > 10);
+    assert_eq!(pbgi::report::to_csv(&scene, &points), text);
+    let broken = text.replacen("pbgi,packet", "pbgi,warp", 1);
+    let err = pbgi::report::from_csv(&broken).unwrap_err();
+    assert!(err.starts_with("line 2: unknown scheme"), "{err}");
+}

@@ -92,6 +92,9 @@ struct ReportArgs {
     /// Path tracer's spp sweep (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
     path_tracer_spp: Vec<u32>,
+    /// Redraw error.png and error.svg from OUT/error.csv (a finished sweep) without rendering.
+    #[arg(long)]
+    replot: bool,
     /// Leave out the Ω = 0 image (every leaf splatted; the slowest point).
     #[arg(long)]
     no_omega_zero: bool,
@@ -595,6 +598,21 @@ fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
 }
 
 fn cmd_report(a: &ReportArgs) -> Res<()> {
+    if a.replot {
+        let csv = a.out.join("error.csv");
+        let text = std::fs::read_to_string(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let (scene, points) = pbgi::report::from_csv(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let (png, svg) = (a.out.join("error.png"), a.out.join("error.svg"));
+        write_plots(
+            &points,
+            a.settings.microbuffer,
+            &format!("{scene}: relative RMSE against time"),
+            &png,
+            &svg,
+        )?;
+        println!("wrote {}, {}", png.display(), svg.display());
+        return Ok(());
+    }
     let scene = load_scene(&a.scene)?;
     let pool = thread_pool(a.threads)?;
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;

@@ -324,6 +324,48 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
     s
 }
 
+/// Reads back what [`to_csv`] wrote: the scene's name and the points (so a
+/// plot or table can be redrawn without rendering again). A malformed line
+/// is an error naming its number.
+pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), String> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim() == to_csv("", &[]).trim() => {}
+        _ => return Err("line 1: not the header of an error sweep's CSV".into()),
+    }
+    let mut scene = String::new();
+    let mut points = Vec::new();
+    for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
+        let bad = |what: &str| format!("line {}: {what}: {line}", i + 1);
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 11 {
+            return Err(bad("expected 11 fields"));
+        }
+        let num = |k: usize| f[k].parse::<f64>().map_err(|_| bad("not a number"));
+        let method = match f[1] {
+            "pbgi" => Method::PointBased {
+                scheme: f[2].parse().map_err(|_| bad("unknown scheme"))?,
+                omega: f[3].parse().map_err(|_| bad("bad Ω"))?,
+                microbuffer: f[4].parse().map_err(|_| bad("bad microbuffer"))?,
+            },
+            "path-tracer" => Method::PathTracer {
+                spp: f[5].parse().map_err(|_| bad("bad spp"))?,
+            },
+            _ => return Err(bad("unknown method")),
+        };
+        scene = f[0].to_string();
+        points.push(ErrorPoint {
+            method,
+            pre_s: num(6)?,
+            trav_s: num(7)?,
+            others_s: num(8)?,
+            total_s: num(9)?,
+            rel_rmse: num(10)?,
+        });
+    }
+    Ok((scene, points))
+}
+
 /// The sweep as a Markdown table, with the figure that matters most: at the
 /// default settings, the point-based error and time next to the path
 /// tracer's time for the same error.

@@ -1,5 +1,5 @@
-//! Error against run time on log-log axes: one curve per scheme (its Ω
-//! sweep at the default microbuffer resolution) and one for the path tracer,
+//! Error against run time on log-log axes: one curve per scheme and
+//! microbuffer resolution (its Ω sweep), the Ω = 0 point, and the path tracer,
 //! written as PNG and SVG. Text uses the embedded DejaVu Sans, so no system
 //! font is needed.
 
@@ -17,23 +17,45 @@ use crate::render::RenderError;
 type Curve = (String, Vec<(f64, f64)>);
 
 fn curves(points: &[ErrorPoint], microbuffer: usize) -> Vec<Curve> {
+    // Every (scheme, N) swept, the default N first, in the sweep's order.
+    let mut keys: Vec<(Scheme, usize)> = Vec::new();
+    for p in points {
+        if let Method::PointBased {
+            scheme,
+            microbuffer: n,
+            ..
+        } = p.method
+            && !keys.contains(&(scheme, n))
+        {
+            keys.push((scheme, n));
+        }
+    }
+    keys.sort_by_key(|&(s, n)| (n != microbuffer, Scheme::ALL.iter().position(|&x| x == s)));
     let mut out: Vec<Curve> = Vec::new();
-    for scheme in Scheme::ALL {
+    let point_based = |keep: &dyn Fn(Scheme, f32, usize) -> bool| -> Vec<(f64, f64)> {
         let mut v: Vec<(f64, f64)> = points
             .iter()
             .filter_map(|p| match p.method {
                 Method::PointBased {
-                    scheme: s,
+                    scheme,
                     omega,
                     microbuffer: n,
-                } if s == scheme && n == microbuffer && omega > 0.0 => Some((p.total_s, p.rel_rmse)),
+                } if keep(scheme, omega, n) => Some((p.total_s, p.rel_rmse)),
                 _ => None,
             })
             .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        v
+    };
+    for (scheme, n) in keys {
+        let v = point_based(&|s, omega, m| s == scheme && m == n && omega > 0.0);
         if !v.is_empty() {
-            v.sort_by(|a, b| a.0.total_cmp(&b.0));
-            out.push((format!("pbgi {scheme} (Ω sweep, N {microbuffer})"), v));
+            out.push((format!("pbgi {scheme} (Ω sweep, N {n})"), v));
         }
+    }
+    let zero = point_based(&|_, omega, _| omega == 0.0);
+    if !zero.is_empty() {
+        out.push(("pbgi Ω = 0 (every leaf splatted)".to_string(), zero));
     }
     let mut pt: Vec<(f64, f64)> = points
         .iter()
@@ -47,13 +69,29 @@ fn curves(points: &[ErrorPoint], microbuffer: usize) -> Vec<Curve> {
     out
 }
 
-const COLORS: [RGBColor; 6] = [
+/// A tick label: at most three significant digits, no float noise.
+fn tick(v: &f64) -> String {
+    if *v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+const COLORS: [RGBColor; 8] = [
     RGBColor(0x1f, 0x77, 0xb4),
     RGBColor(0xff, 0x7f, 0x0e),
     RGBColor(0x2c, 0xa0, 0x2c),
     RGBColor(0xd6, 0x27, 0x28),
     RGBColor(0x94, 0x67, 0xbd),
     RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0x7f, 0x7f, 0x7f),
 ];
 
 fn draw<DB: DrawingBackend>(
@@ -87,6 +125,8 @@ where
         .configure_mesh()
         .x_desc("time (s, wall clock)")
         .y_desc("relative RMSE")
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
@@ -123,8 +163,9 @@ fn register_font() {
 }
 
 /// Writes the error-against-time plot of `points` to `png` and `svg`: the
-/// Ω sweep of each scheme at microbuffer resolution `microbuffer`, and the
-/// path tracer's spp sweep.
+/// Ω sweep of each scheme at microbuffer resolution `microbuffer`, those at
+/// the other resolutions swept, the Ω = 0 point and the path tracer's spp
+/// sweep.
 pub fn write_plots(
     points: &[ErrorPoint],
     microbuffer: usize,
