@@ -18,7 +18,7 @@ use std::simd::{Select, prelude::*};
 use glam::Vec3;
 
 use super::splat::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
-use super::{COVER_ONE, MicroBuffer, NO_KEY, Table};
+use super::{COVER_CAP, COVER_ONE, MicroBuffer, NO_KEY, Table};
 use crate::cut::node_test::{F32s, LANES, Real};
 use crate::cut::{CutSink, Isa};
 use crate::tree::{NodeId, SplatRecord, Tree};
@@ -429,24 +429,20 @@ fn packet_body(
         let small = small_m.to_bitmask() as u16 & show;
         let large = show & !small;
         let leaf = rec.leaf != 0;
-        let (d, pix, vis) = (l.d.to_array(), pixel.to_array(), visible.to_bitmask() as u16);
+        let (d, vis) = (l.d.to_array(), visible.to_bitmask() as u16);
         // Small splats, and the fallback of leaves covering no pixel centre
         // (with `Ω` capped at the pixel's).
         // (An `if`, not `bool::then` with a closure: an out-of-line closure
         // would be compiled for the baseline target, not this clone.)
         let small_plan = if small != 0 || (leaf && large != 0) {
-            Some(lanes4(plan_small(
-                t,
-                l.x,
-                l.y,
-                F32s::select(small_m, l.omega, pixel_omega),
-            )))
+            let plan = plan_small(t, l.x, l.y, F32s::select(small_m, l.omega, pixel_omega));
+            Some(SmallWrites::new(&plan, l.d, node, pixel))
         } else {
             None
         };
         if let Some(sp) = &small_plan {
             for i in bits(small) {
-                bufs[i].draw_small(&sp.lane(i), super::key(d[i], node), pix[i]);
+                bufs[i].draw_small_lane(sp, i);
             }
         }
         if large == 0 {
@@ -457,19 +453,21 @@ fn packet_body(
             let m = [dp.m[0].to_array(), dp.m[1].to_array(), dp.m[2].to_array()];
             let c = [dp.c[0].to_array(), dp.c[1].to_array(), dp.c[2].to_array()];
             let (mc, r, bx) = (dp.mc.to_array(), dp.r.to_array(), boxes(&dp.bx));
+            let fronts = dp.fronts.to_bitmask() as u16;
             for i in bits(large) {
                 let plan = DiskPlan {
+                    fronts: fronts >> i & 1 != 0,
                     m: [m[0][i], m[1][i], m[2][i]],
                     c: [c[0][i], c[1][i], c[2][i]],
                     mc: mc[i],
                     r: r[i],
                     bx: bx.lane(i),
                 };
-                if !bufs[i].draw_disk(&plan, node)
+                if !bufs[i].draw_disk_tiles(&plan, node)
                     && vis >> i & 1 != 0
                     && let Some(sp) = &small_plan
                 {
-                    bufs[i].draw_small(&sp.lane(i), super::key(d[i], node), pix[i]);
+                    bufs[i].draw_small_lane(sp, i);
                 }
             }
         } else {
@@ -485,7 +483,7 @@ fn packet_body(
                     outer2: outer2[i],
                     bx: bx.lane(i),
                 };
-                bufs[i].draw_cone(Vec3::new(wx[i], wy[i], wz[i]), &plan, super::key(d[i], node));
+                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, super::key(d[i], node));
             }
         }
     }
@@ -515,35 +513,54 @@ fn bits(m: u16) -> Bits {
     Bits(m)
 }
 
-/// A small-splat plan of 16 lanes, as arrays.
-struct SmallLanes {
-    p: [[f32; LANES]; 4],
-    w: [[f32; LANES]; 4],
-    cover: [[f32; LANES]; 4],
+/// A small-splat plan of 16 lanes reduced to the pixel writes it makes:
+/// per corner and lane the pixel, the fixed-point coverage to add, and the
+/// keys to fold into `any` and `own` ([`NO_KEY`] where the corner has no
+/// weight or is not owned), all worked out in the lanes, so that each
+/// receiver's part is four plain read-modify-writes (the scalar pipeline's
+/// `write_if`, bit for bit).
+struct SmallWrites {
+    p: [[u32; LANES]; 4],
+    cover: [[u32; LANES]; 4],
+    any: [[u64; LANES]; 4],
+    own: [[u64; LANES]; 4],
 }
 
-#[inline(always)]
-fn lanes4(p: SmallPlan<F32s>) -> SmallLanes {
-    SmallLanes {
-        p: arrays4(p.p),
-        w: arrays4(p.w),
-        cover: arrays4(p.cover),
+impl SmallWrites {
+    #[inline(always)]
+    fn new(plan: &SmallPlan<F32s>, depth: F32s, node: NodeId, pixel: F32s) -> Self {
+        let key = (depth.to_bits().cast::<u64>() << 32) | Simd::splat(u64::from(node));
+        let no_key = Simd::<u64, LANES>::splat(NO_KEY);
+        let (zero, one, unit) = (F32s::splat(0.0), F32s::splat(1.0), F32s::splat(COVER_ONE));
+        let mut w = SmallWrites {
+            p: [[0; LANES]; 4],
+            cover: [[0; LANES]; 4],
+            any: [[NO_KEY; LANES]; 4],
+            own: [[NO_KEY; LANES]; 4],
+        };
+        for k in 0..4 {
+            let m = zero.lt(plan.w[k]);
+            let c = F32s::select(m, plan.cover[k], zero).min_of(one) * unit;
+            let any = m.cast::<i64>().select(key, no_key);
+            let owns = plan.p[k].simd_eq(pixel).cast::<i64>();
+            w.p[k] = plan.p[k].cast::<u32>().to_array();
+            w.cover[k] = c.cast::<u32>().to_array();
+            w.any[k] = any.to_array();
+            w.own[k] = owns.select(any, no_key).to_array();
+        }
+        w
     }
 }
 
-#[inline(always)]
-fn arrays4(v: [F32s; 4]) -> [[f32; LANES]; 4] {
-    [v[0].to_array(), v[1].to_array(), v[2].to_array(), v[3].to_array()]
-}
-
-impl SmallLanes {
+impl MicroBuffer {
+    /// Lane `i`'s part of a small splat.
     #[inline(always)]
-    fn lane(&self, i: usize) -> SmallPlan<f32> {
-        let (p, w, c) = (&self.p, &self.w, &self.cover);
-        SmallPlan {
-            p: [p[0][i], p[1][i], p[2][i], p[3][i]],
-            w: [w[0][i], w[1][i], w[2][i], w[3][i]],
-            cover: [c[0][i], c[1][i], c[2][i], c[3][i]],
+    fn draw_small_lane(&mut self, sw: &SmallWrites, i: usize) {
+        for k in 0..4 {
+            let p = sw.p[k][i] as usize;
+            self.cover[p] = (self.cover[p] + sw.cover[k][i]).min(COVER_CAP);
+            self.any[p] = self.any[p].min(sw.any[k][i]);
+            self.own[p] = self.own[p].min(sw.own[k][i]);
         }
     }
 }

@@ -145,7 +145,8 @@ struct Table {
     n: usize,
     /// Local unit direction of each pixel centre.
     dir: Vec<Vec3>,
-    /// The same by component (what the cone and disk loops read).
+    /// The same by component (what the cone and disk loops read), padded
+    /// with [`LANES`] zeros.
     dir_x: Vec<f32>,
     dir_y: Vec<f32>,
     dir_z: Vec<f32>,
@@ -154,7 +155,7 @@ struct Table {
     /// Exact `∫ cosθ dω` over each pixel (θ from the normal, +z), padded
     /// with zeros to a multiple of 16 pixels.
     cos_weight: Vec<f32>,
-    /// Angular size of each pixel, `√ΔΩ`.
+    /// Angular size of each pixel, `√ΔΩ`, padded with [`LANES`] zeros.
     pixel_size: Vec<f32>,
     /// The largest pixel size.
     pixel_angle: f32,
@@ -164,6 +165,10 @@ struct Table {
     reach: Vec<f32>,
     /// The same over the whole map, for wider footprints.
     reach_max: f32,
+    /// The lowest pixel centre's height above the horizon (its `z`) and
+    /// the sine of its angle from the normal: no pixel's ray leans further.
+    lowest_z: f32,
+    lowest_sin: f32,
 }
 
 /// Footprints up to this many pixels from their centre use the local reach.
@@ -210,10 +215,18 @@ impl Table {
                 reach[r * n + c] = (s * pixels_per_unit * 1.1) as f32;
             }
         }
+        let lowest_z = dir.iter().map(|d| d.z).fold(1.0, f32::min);
         let reach_max = (stretch.iter().copied().fold(0.0, f64::max) * pixels_per_unit * 1.1) as f32;
-        let pixel_size: Vec<f32> = solid_angle.iter().map(|w| w.sqrt()).collect();
+        let mut pixel_size: Vec<f32> = solid_angle.iter().map(|w| w.sqrt()).collect();
         let pixel_angle = pixel_size.iter().copied().fold(0.0, f32::max);
-        let component = |f: fn(&Vec3) -> f32| dir.iter().map(f).collect::<Vec<f32>>();
+        // Padded, so that a row of a 16-pixel tile loads in one piece
+        // anywhere in the grid (lanes past the last pixel are outside every box).
+        pixel_size.resize(len + LANES, 0.0);
+        let component = |f: fn(&Vec3) -> f32| {
+            let mut v: Vec<f32> = dir.iter().map(f).collect();
+            v.resize(len + LANES, 0.0);
+            v
+        };
         let (dir_x, dir_y, dir_z) = (component(|d| d.x), component(|d| d.y), component(|d| d.z));
         Table {
             n,
@@ -227,6 +240,8 @@ impl Table {
             pixel_angle,
             reach,
             reach_max,
+            lowest_z,
+            lowest_sin: (1.0 - lowest_z * lowest_z).max(0.0).sqrt(),
         }
     }
 
@@ -529,6 +544,102 @@ mod tests {
             normal: (-c).to_array(),
             leaf: 0,
         }
+    }
+
+    /// xorshift64*: a fixed stream of test inputs.
+    struct Rng(u64);
+    impl Rng {
+        fn unit(&mut self) -> f32 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn dir(&mut self) -> Vec3 {
+            loop {
+                let v = Vec3::new(self.unit(), self.unit(), self.unit()) * 2.0 - 1.0;
+                if (0.01..=1.0).contains(&v.length_squared()) {
+                    return v.normalize();
+                }
+            }
+        }
+    }
+
+    /// A node around the receiver at the origin (normal +z), of every kind
+    /// the draws meet: far and near, tiny and huge, facing, edge-on, and
+    /// coplanar with the receiver a rounding error above or below its plane.
+    fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
+        let kind = (rng.unit() * 4.0) as u32;
+        let d = 10f32.powf(rng.unit() * 4.0 - 3.0);
+        let (center, normal) = match kind {
+            0 => {
+                // On the receiver's plane, normal nearly its own.
+                let c = rng.dir() * Vec3::new(1.0, 1.0, 0.0);
+                let z = (rng.unit() - 0.5) * 1e-6 * d;
+                (c * d + Vec3::Z * z, (Vec3::Z + rng.dir() * 1e-4).normalize())
+            }
+            1 => {
+                // Near the horizon, any normal.
+                let c = (rng.dir() * Vec3::new(1.0, 1.0, 0.05)).normalize_or(Vec3::X);
+                (c * d, rng.dir())
+            }
+            _ => (rng.dir() * d, rng.dir()),
+        };
+        SplatRecord {
+            center: center.to_array(),
+            area: d * d * 10f32.powf(rng.unit() * 5.0 - 4.0),
+            normal: normal.to_array(),
+            leaf: u32::from(leaf),
+        }
+    }
+
+    fn same_pixels(a: &MicroBuffer, b: &MicroBuffer) -> bool {
+        a.own == b.own && a.any == b.any && a.cover == b.cover
+    }
+
+    #[test]
+    fn tiled_draws_write_the_pixels_of_the_scalar_draws() {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        let (mut drawn, mut hits) = (0, 0);
+        for n in [1, 2, 3, 4, 5, 7, 8, 9, 12, 16, 17, 33, 64] {
+            let mut a = MicroBuffer::new(n).unwrap();
+            let mut b = MicroBuffer::new(n).unwrap();
+            for i in 0..600 {
+                let (frame_n, node) = (Vec3::Z, i as NodeId);
+                a.reset(Vec3::ZERO, frame_n);
+                b.reset(Vec3::ZERO, frame_n);
+                let leaf = i % 2 == 0;
+                let rec = node_around(&mut rng, leaf);
+                let Some(l) = a.locate(&rec) else { continue };
+                let t = a.table.clone();
+                let pixel = splat::pixel_of(&t, l.x, l.y);
+                let visible = 0.0 < l.wz;
+                drawn += 1;
+                if leaf {
+                    let plan =
+                        splat::plan_disk(&t, &a.frame_lanes(), &NodeSplat::of(&rec), l.x, l.y, pixel, l.d);
+                    let hit = a.draw_disk(&plan, node);
+                    assert_eq!(hit, b.draw_disk_tiles(&plan, node), "N {n}, node {rec:?}");
+                    assert!(same_pixels(&a, &b), "disk: N {n}, node {rec:?}");
+                    // The cull of disks that cannot face any pixel drops no hit.
+                    let mut c = MicroBuffer::new(n).unwrap();
+                    c.reset(Vec3::ZERO, frame_n);
+                    let unculled = splat::DiskPlan { fronts: true, ..plan };
+                    assert_eq!(hit, c.draw_disk(&unculled, node), "cull: N {n}, node {rec:?}");
+                    assert!(same_pixels(&a, &c), "cull: N {n}, node {rec:?}");
+                    hits += usize::from(hit);
+                } else {
+                    let plan = splat::plan_cone(&t, l.x, l.y, pixel, l.omega, visible);
+                    let w = Vec3::new(l.wx, l.wy, l.wz);
+                    a.draw_cone(w, &plan, key(l.d, node));
+                    b.draw_cone_tiles(w, &plan, key(l.d, node));
+                    assert!(same_pixels(&a, &b), "cone: N {n}, node {rec:?}");
+                    hits += usize::from(a.cover.iter().any(|&c| c > 0));
+                }
+            }
+        }
+        // The cases must draw something, or the comparison proves nothing.
+        assert!(drawn > 3000 && hits > 1000, "{drawn} drawn, {hits} with pixels");
     }
 
     #[test]

@@ -15,11 +15,14 @@
 //! vector code and the scalar pipeline for one receiver, with the same
 //! operations; only the read-modify-write of pixels is per receiver.
 
+use std::simd::prelude::*;
+use std::simd::simd_swizzle;
+
 use glam::Vec3;
 
 use super::lanes::{FrameLanes, Located, NodeSplat};
 use super::{COVER_CAP, COVER_ONE, MicroBuffer, NEAR, NO_KEY, Table, key};
-use crate::cut::node_test::Real;
+use crate::cut::node_test::{F32s, LANES, M32s, Real};
 use crate::tree::{NodeId, SplatRecord};
 
 /// Leaf disks are rasterized this much larger than their radius, so that
@@ -178,7 +181,9 @@ pub(crate) fn plan_cone<V: Real>(t: &Table, x: V, y: V, pixel: V, omega: V, visi
 /// A leaf's disk in the receiver's frame: normal `m`, centre `c`, `m·c`,
 /// radius `r`, and the box of pixels it may cover.
 #[derive(Clone, Copy)]
-pub(crate) struct DiskPlan<V> {
+pub(crate) struct DiskPlan<V: Real> {
+    /// Whether the disk's front can face some pixel's ray at all.
+    pub fronts: V::Mask,
     pub m: [V; 3],
     pub c: [V; 3],
     pub mc: V,
@@ -212,6 +217,15 @@ pub(crate) fn plan_disk<V: Real>(
         vx * f.nx + vy * f.ny + vz * f.nz,
     ];
     let mc = m[0] * c[0] + m[1] * c[1] + m[2] * c[2];
+    // A ray `u` hits the front only where `m·u < 0`. Over the pixel centres
+    // (`u_z ≥ z₀`, `|u_xy| ≤ √(1 − z₀²)`) `m·u ≥ m_z·z₀ − |m_xy|·√(1 − z₀²)`
+    // (Cauchy–Schwarz); where that is clearly positive no pixel can be hit.
+    // This drops the leaves coplanar with the receiver that rounding puts
+    // just below its horizon, facing it by a hair (most leaves drawn as
+    // disks): the bound holds with a margin far above the rounding of the
+    // dot products, so it never drops a hit.
+    let m_xy = (m[0] * m[0] + m[1] * m[1]).sqrt();
+    let fronts = (m[2] * V::splat(t.lowest_z) - m_xy * V::splat(t.lowest_sin)).le(V::splat(1e-4));
     // The edge ramp reaches half a pixel past the rim; a disk reaching the
     // receiver may cover any pixel.
     let angle = sine_angle_bound(r / d) + V::splat(0.5 * t.pixel_angle + 1e-3);
@@ -219,6 +233,7 @@ pub(crate) fn plan_disk<V: Real>(
     let whole = d.le(r);
     let (zero, last) = (V::splat(0.0), V::splat((t.n - 1) as f32));
     DiskPlan {
+        fronts,
         m,
         c,
         mc,
@@ -232,26 +247,27 @@ pub(crate) fn plan_disk<V: Real>(
     }
 }
 
-impl ConePlan<f32> {
-    /// Whether the cone around `w` covers the pixel of centre direction
-    /// `u`, and by how much.
+impl<V: Real> ConePlan<V> {
+    /// Whether the cone around `w` covers the pixels of centre directions
+    /// `u` (one pixel, or sixteen in the lanes), and by how much.
     #[inline(always)]
-    fn cover(&self, w: Vec3, ux: f32, uy: f32, uz: f32) -> (bool, f32) {
-        let (ex, ey, ez) = (ux - w.x, uy - w.y, uz - w.z);
+    fn cover(&self, w: [V; 3], ux: V, uy: V, uz: V) -> (V::Mask, V) {
+        let (ex, ey, ez) = (ux - w[0], uy - w[1], uz - w[2]);
         let c2 = ex * ex + ey * ey + ez * ez;
-        let ramp = (0.5 + (self.a - c2.sqrt()) * self.inv_s).min_of(1.0);
-        let cover = f32::select(c2.le(self.inner2), 1.0, ramp);
-        (c2 < self.outer2 && 0.0 < cover, cover)
+        let ramp = (V::splat(0.5) + (self.a - c2.sqrt()) * self.inv_s).min_of(V::splat(1.0));
+        let cover = V::select(c2.le(self.inner2), V::splat(1.0), ramp);
+        (c2.lt(self.outer2) & V::splat(0.0).lt(cover), cover)
     }
 }
 
-impl DiskPlan<f32> {
-    /// Whether the ray of direction `u` from the receiver hits the disk's
-    /// front, at what distance, and the pixel's coverage: the disk's edge is
-    /// a ramp one pixel (angular size `delta`) wide at the hit distance, so a
-    /// disk over a few pixels still shows its true area on average.
+impl<V: Real> DiskPlan<V> {
+    /// Whether the rays of directions `u` from the receiver (one pixel's, or
+    /// sixteen in the lanes) hit the disk's front, at what distance, and the
+    /// pixels' coverage: the disk's edge is a ramp one pixel (angular size
+    /// `delta`) wide at the hit distance, so a disk over a few pixels still
+    /// shows its true area on average.
     #[inline(always)]
-    fn hit(&self, ux: f32, uy: f32, uz: f32, delta: f32) -> (bool, f32, f32) {
+    fn hit(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
         let [mx, my, mz] = self.m;
         let denom = mx * ux + my * uy + mz * uz;
         let t = self.mc / denom;
@@ -259,8 +275,189 @@ impl DiskPlan<f32> {
         let ey = uy * t - self.c[1];
         let ez = uz * t - self.c[2];
         let e = (ex * ex + ey * ey + ez * ez).sqrt();
-        let cover = (0.5 + (self.r - e) / (delta * t)).min_of(1.0);
-        (denom < 0.0 && 0.0 < t && 0.0 < cover, t, cover)
+        let cover = (V::splat(0.5) + (self.r - e) / (delta * t)).min_of(V::splat(1.0));
+        let zero = V::splat(0.0);
+        (denom.lt(zero) & zero.lt(t) & zero.lt(cover), t, cover)
+    }
+}
+
+impl DiskPlan<f32> {
+    /// The same disk in every lane.
+    #[inline(always)]
+    fn splat(&self) -> DiskPlan<F32s> {
+        let s = F32s::splat;
+        DiskPlan {
+            fronts: M32s::splat(self.fronts),
+            m: [s(self.m[0]), s(self.m[1]), s(self.m[2])],
+            c: [s(self.c[0]), s(self.c[1]), s(self.c[2])],
+            mc: s(self.mc),
+            r: s(self.r),
+            bx: PixelBox {
+                c0: s(self.bx.c0),
+                c1: s(self.bx.c1),
+                r0: s(self.bx.r0),
+                r1: s(self.bx.r1),
+            },
+        }
+    }
+}
+
+impl ConePlan<f32> {
+    /// The same cone in every lane.
+    #[inline(always)]
+    fn splat(&self) -> ConePlan<F32s> {
+        let s = F32s::splat;
+        ConePlan {
+            a: s(self.a),
+            inv_s: s(self.inv_s),
+            inner2: s(self.inner2),
+            outer2: s(self.outer2),
+            bx: PixelBox {
+                c0: s(self.bx.c0),
+                c1: s(self.bx.c1),
+                r0: s(self.bx.r0),
+                r1: s(self.bx.r1),
+            },
+        }
+    }
+}
+
+/// A pixel box is swept 16 pixels at a time in tiles of `w` columns by
+/// `16 / w` rows (`w` = 4, 8 or 16, the narrowest that spans the box), each
+/// row of a tile one contiguous load from a pixel table. Lane `k` is column
+/// `k % w`, row `k / w` of the tile.
+#[derive(Clone, Copy)]
+struct Tile {
+    /// Pixel index of the tile's first lane.
+    base: usize,
+    /// Lanes inside the box.
+    inside: M32s,
+}
+
+/// Tile width for a box `cols` pixels wide.
+#[inline(always)]
+fn tile_width(cols: usize) -> usize {
+    if cols <= 4 {
+        4
+    } else if cols <= 8 {
+        8
+    } else {
+        16
+    }
+}
+
+/// Column and row of each lane in a tile of width 4, 8 and 16.
+const TILE_COL: [[i32; LANES]; 3] = [
+    [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3],
+    [0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7],
+    [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15],
+];
+const TILE_ROW: [[i32; LANES]; 3] = [
+    [0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3],
+    [0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1],
+    [0; LANES],
+];
+
+/// Sixteen pixels of the table `a` (padded by [`LANES`] past the last
+/// pixel, so that every row load stays inside): the tile of width `w` whose
+/// first lane is pixel `base`, rows `n` apart; rows past `rows` repeat the
+/// last (their lanes are outside the box).
+#[inline(always)]
+fn load_tile(a: &[f32], n: usize, base: usize, w: usize, rows: usize) -> F32s {
+    let row = |j: usize| base + j.min(rows - 1) * n;
+    match w {
+        4 => {
+            let q = |j: usize| Simd::<f32, 4>::from_slice(&a[row(j)..row(j) + 4]);
+            let lo: Simd<f32, 8> = simd_swizzle!(q(0), q(1), [0, 1, 2, 3, 4, 5, 6, 7]);
+            let hi: Simd<f32, 8> = simd_swizzle!(q(2), q(3), [0, 1, 2, 3, 4, 5, 6, 7]);
+            simd_swizzle!(lo, hi, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
+        }
+        8 => {
+            let h = |j: usize| Simd::<f32, 8>::from_slice(&a[row(j)..row(j) + 8]);
+            simd_swizzle!(h(0), h(1), [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
+        }
+        _ => F32s::from_slice(&a[base..base + LANES]),
+    }
+}
+
+/// The tiles covering the pixel box `(c0, c1, r0, r1)` of an `n`-wide grid,
+/// row by row of tiles.
+struct Tiles {
+    n: usize,
+    c0: usize,
+    c1: usize,
+    r1: usize,
+    w: usize,
+    h: usize,
+    shape: usize,
+    r: usize,
+    c: usize,
+}
+
+impl Tiles {
+    #[inline(always)]
+    fn new(n: usize, (c0, c1, r0, r1): (usize, usize, usize, usize)) -> Self {
+        let w = tile_width(c1 + 1 - c0);
+        Tiles {
+            n,
+            c0,
+            c1,
+            r1,
+            w,
+            h: LANES / w,
+            shape: w.trailing_zeros() as usize - 2,
+            r: r0,
+            c: c0,
+        }
+    }
+}
+
+impl Iterator for Tiles {
+    /// The tile, and its rows inside the box.
+    type Item = (Tile, usize);
+    #[inline(always)]
+    fn next(&mut self) -> Option<(Tile, usize)> {
+        if self.r > self.r1 {
+            return None;
+        }
+        let (r, c) = (self.r, self.c);
+        let cols = (self.c1 + 1 - c).min(self.w);
+        let rows = (self.r1 + 1 - r).min(self.h);
+        let inside = Simd::from_array(TILE_COL[self.shape]).simd_lt(Simd::splat(cols as i32))
+            & Simd::from_array(TILE_ROW[self.shape]).simd_lt(Simd::splat(rows as i32));
+        self.c += self.w;
+        if self.c > self.c1 {
+            self.c = self.c0;
+            self.r += self.h;
+        }
+        Some((
+            Tile {
+                base: r * self.n + c,
+                inside,
+            },
+            rows,
+        ))
+    }
+}
+
+/// [`MicroBuffer::write`] on the buffer's arrays (borrowed apart from its
+/// pixel table).
+#[inline(always)]
+fn write_pixel(
+    own: &mut [u64],
+    any: &mut [u64],
+    cover: &mut [u32],
+    p: usize,
+    key: u64,
+    coverage: f32,
+    owns: bool,
+) {
+    debug_assert!(coverage >= 0.0, "coverage {coverage}");
+    let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
+    cover[p] = (cover[p] + c).min(COVER_CAP);
+    any[p] = any[p].min(key);
+    if owns {
+        own[p] = own[p].min(key);
     }
 }
 
@@ -268,13 +465,15 @@ impl MicroBuffer {
     /// Adds a splat of `key` covering the fraction `coverage` ∈ [0, 1] of pixel `p`.
     #[inline(always)]
     fn write(&mut self, p: usize, key: u64, coverage: f32, owns: bool) {
-        debug_assert!(coverage >= 0.0, "coverage {coverage}");
-        let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
-        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
-        self.any[p] = self.any[p].min(key);
-        if owns {
-            self.own[p] = self.own[p].min(key);
-        }
+        write_pixel(
+            &mut self.own,
+            &mut self.any,
+            &mut self.cover,
+            p,
+            key,
+            coverage,
+            owns,
+        );
     }
 
     /// [`write`](Self::write) where `m`, else nothing, without a branch:
@@ -308,7 +507,7 @@ impl MicroBuffer {
             for c in c0..=c1 {
                 let p = r * n + c;
                 let t = &self.table;
-                let (m, cover) = plan.cover(w, t.dir_x[p], t.dir_y[p], t.dir_z[p]);
+                let (m, cover) = plan.cover([w.x, w.y, w.z], t.dir_x[p], t.dir_y[p], t.dir_z[p]);
                 if m {
                     self.write(p, key, cover, 0.5 <= cover);
                 }
@@ -320,6 +519,9 @@ impl MicroBuffer {
     /// pixel centre.
     #[inline(always)]
     pub(crate) fn draw_disk(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
+        if !plan.fronts {
+            return false;
+        }
         let (c0, c1, r0, r1) = plan.bx.bounds();
         let n = self.table.n;
         let mut any_hit = false;
@@ -332,6 +534,70 @@ impl MicroBuffer {
                     self.write(p, key(depth, node), cover, 0.5 <= cover);
                     any_hit = true;
                 }
+            }
+        }
+        any_hit
+    }
+
+    /// [`draw_cone`](Self::draw_cone) 16 pixels at a time (the 16-lane
+    /// pipeline): the same coverage of each pixel, bit for bit.
+    #[inline(always)]
+    pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
+        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
+        let n = t.n;
+        let (lanes, wl) = (plan.splat(), [w.x, w.y, w.z].map(F32s::splat));
+        let tiles = Tiles::new(n, plan.bx.bounds());
+        let (tw, shape) = (tiles.w, tiles.shape);
+        for (tile, rows) in tiles {
+            let ux = load_tile(&t.dir_x, n, tile.base, tw, rows);
+            let uy = load_tile(&t.dir_y, n, tile.base, tw, rows);
+            let uz = load_tile(&t.dir_z, n, tile.base, tw, rows);
+            let (m, cover) = lanes.cover(wl, ux, uy, uz);
+            let mut hits = (m & tile.inside).to_bitmask();
+            if hits == 0 {
+                continue;
+            }
+            let cover = cover.to_array();
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let p = tile.base + TILE_ROW[shape][k] as usize * n + TILE_COL[shape][k] as usize;
+                write_pixel(own, any, cov, p, key, cover[k], 0.5 <= cover[k]);
+            }
+        }
+    }
+
+    /// [`draw_disk`](Self::draw_disk) 16 pixels at a time (the 16-lane
+    /// pipeline): the same hits, depths and coverage, bit for bit.
+    #[inline(always)]
+    pub(crate) fn draw_disk_tiles(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
+        if !plan.fronts {
+            return false;
+        }
+
+        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
+        let n = t.n;
+        let lanes = plan.splat();
+        let tiles = Tiles::new(n, plan.bx.bounds());
+        let (tw, shape) = (tiles.w, tiles.shape);
+        let mut any_hit = false;
+        for (tile, rows) in tiles {
+            let ux = load_tile(&t.dir_x, n, tile.base, tw, rows);
+            let uy = load_tile(&t.dir_y, n, tile.base, tw, rows);
+            let uz = load_tile(&t.dir_z, n, tile.base, tw, rows);
+            let delta = load_tile(&t.pixel_size, n, tile.base, tw, rows);
+            let (m, depth, cover) = lanes.hit(ux, uy, uz, delta);
+            let mut hits = (m & tile.inside).to_bitmask();
+            if hits == 0 {
+                continue;
+            }
+            any_hit = true;
+            let (depth, cover) = (depth.to_array(), cover.to_array());
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let p = tile.base + TILE_ROW[shape][k] as usize * n + TILE_COL[shape][k] as usize;
+                write_pixel(own, any, cov, p, key(depth[k], node), cover[k], 0.5 <= cover[k]);
             }
         }
         any_hit
