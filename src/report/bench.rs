@@ -8,6 +8,7 @@
 //! order-independent checksum: a scheme that cut differently fails the
 //! benchmark instead of reporting a speed-up.
 
+use std::simd::{Select, prelude::*};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -142,19 +143,125 @@ fn mix(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// murmur3's 32-bit finalizer: spreads a node index over 32 bits; written
+/// over a lane type so a vector step hashes its 16 nodes at once.
+#[inline(always)]
+fn hash32<T>(x: T) -> T
+where
+    T: Copy
+        + std::ops::BitXor<Output = T>
+        + std::ops::Shr<u32, Output = T>
+        + std::ops::Mul<Output = T>
+        + From<u32>,
+{
+    let mut h = x ^ T::from(0x9E37_79B9);
+    h = h ^ (h >> 16);
+    h = h * T::from(0x85EB_CA6B);
+    h = h ^ (h >> 13);
+    h = h * T::from(0xC2B2_AE35);
+    h ^ (h >> 16)
+}
+
+/// `u32` with wrapping arithmetic, for [`hash32`].
+#[derive(Clone, Copy)]
+struct W32(u32);
+
+impl From<u32> for W32 {
+    #[inline(always)]
+    fn from(x: u32) -> Self {
+        W32(x)
+    }
+}
+impl std::ops::BitXor for W32 {
+    type Output = W32;
+    #[inline(always)]
+    fn bitxor(self, o: W32) -> W32 {
+        W32(self.0 ^ o.0)
+    }
+}
+impl std::ops::Shr<u32> for W32 {
+    type Output = W32;
+    #[inline(always)]
+    fn shr(self, k: u32) -> W32 {
+        W32(self.0 >> k)
+    }
+}
+impl std::ops::Mul for W32 {
+    type Output = W32;
+    #[inline(always)]
+    fn mul(self, o: W32) -> W32 {
+        W32(self.0.wrapping_mul(o.0))
+    }
+}
+
+/// `u32` lanes with the operations [`hash32`] needs (vector `*` wraps).
+#[derive(Clone, Copy)]
+struct U32s(Simd<u32, LANES>);
+
+impl From<u32> for U32s {
+    #[inline(always)]
+    fn from(x: u32) -> Self {
+        U32s(Simd::splat(x))
+    }
+}
+impl std::ops::BitXor for U32s {
+    type Output = U32s;
+    #[inline(always)]
+    fn bitxor(self, o: U32s) -> U32s {
+        U32s(self.0 ^ o.0)
+    }
+}
+impl std::ops::Shr<u32> for U32s {
+    type Output = U32s;
+    #[inline(always)]
+    fn shr(self, k: u32) -> U32s {
+        U32s(self.0 >> Simd::splat(k))
+    }
+}
+impl std::ops::Mul for U32s {
+    type Output = U32s;
+    #[inline(always)]
+    fn mul(self, o: U32s) -> U32s {
+        U32s(self.0 * o.0)
+    }
+}
+
 /// Counts splats and sums a checksum of each receiver's cut that does not
-/// depend on the order the scheme reports it in.
+/// depend on the order the scheme reports it in: per receiver `Σ hash(node)`.
+/// It takes each scheme's vector steps whole (one hash per packet step, 16
+/// hashes in the lanes per single step), as a sink of a vector scheme should,
+/// so `trav.` times the traversal rather than per-splat bookkeeping.
 struct CutDigest {
-    /// Per receiver of the packet: `Σ mix(node)`.
-    sums: [u64; 16],
+    /// Per receiver of the packet (wrapping sums).
+    sums: Simd<u64, LANES>,
     splats: u64,
 }
 
 impl CutSink for CutDigest {
     #[inline(always)]
     fn splat(&mut self, receiver: usize, node: NodeId) {
-        self.sums[receiver] = self.sums[receiver].wrapping_add(mix(node as u64));
+        let s = &mut self.sums.as_mut_array()[receiver];
+        *s = s.wrapping_add(u64::from(hash32(W32(node)).0));
         self.splats += 1;
+    }
+
+    #[inline(always)]
+    fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
+        debug_assert!(base == 0, "a packet's receivers start at 0");
+        let h = Simd::splat(u64::from(hash32(W32(node)).0));
+        let m = Mask::<i64, LANES>::from_bitmask(u64::from(lanes));
+        self.sums += m.select(h, Simd::splat(0));
+        self.splats += u64::from(lanes.count_ones());
+    }
+
+    #[inline(always)]
+    fn splat_nodes(&mut self, receiver: usize, nodes: &[NodeId; LANES], lanes: u16) {
+        let h = hash32(U32s(Simd::from_array(*nodes))).0;
+        let m = Mask::<i32, LANES>::from_bitmask(u64::from(lanes));
+        let sum = m.select(h, Simd::splat(0)).cast::<u64>().reduce_sum();
+        let s = &mut self.sums.as_mut_array()[receiver];
+        *s = s.wrapping_add(sum);
+        self.splats += u64::from(lanes.count_ones());
     }
 }
 
@@ -221,7 +328,7 @@ pub fn bench(
                 .par_iter()
                 .map(|p| {
                     let mut sink = CutDigest {
-                        sums: [0; 16],
+                        sums: Simd::splat(0),
                         splats: 0,
                     };
                     let scheme = match choice {
@@ -229,7 +336,7 @@ pub fn bench(
                         SchemeChoice::Auto => auto_scheme(p.receivers.len()),
                     };
                     let stats = traversal.run(scheme, &p.receivers, &mut sink);
-                    let digest = sink.sums[..p.receivers.len()]
+                    let digest = sink.sums.as_array()[..p.receivers.len()]
                         .iter()
                         .enumerate()
                         .fold(0u64, |acc, (l, &s)| {
