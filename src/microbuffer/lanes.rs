@@ -220,6 +220,11 @@ impl PacketCut {
 
     #[inline(always)]
     fn add(&mut self, node: NodeId, lanes: u16) {
+        // A packet step splatting no lane (all traversed or discarded) adds
+        // nothing: listing its node would cost the shading a locate for naught.
+        if lanes == 0 {
+            return;
+        }
         if node as usize >= self.lanes.len() {
             // A node of another tree: grow rather than fail.
             self.lanes.resize(node as usize + 1, 0);
