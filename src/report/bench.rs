@@ -143,87 +143,23 @@ fn mix(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// murmur3's 32-bit finalizer: spreads a node index over 32 bits; written
-/// over a lane type so a vector step hashes its 16 nodes at once.
+/// murmur3's 32-bit finalizer: spreads a node index over 32 bits.
 #[inline(always)]
-fn hash32<T>(x: T) -> T
-where
-    T: Copy
-        + std::ops::BitXor<Output = T>
-        + std::ops::Shr<u32, Output = T>
-        + std::ops::Mul<Output = T>
-        + From<u32>,
-{
-    let mut h = x ^ T::from(0x9E37_79B9);
-    h = h ^ (h >> 16);
-    h = h * T::from(0x85EB_CA6B);
-    h = h ^ (h >> 13);
-    h = h * T::from(0xC2B2_AE35);
+fn hash32(x: u32) -> u32 {
+    let mut h = x ^ 0x9E37_79B9;
+    h = (h ^ (h >> 16)).wrapping_mul(0x85EB_CA6B);
+    h = (h ^ (h >> 13)).wrapping_mul(0xC2B2_AE35);
     h ^ (h >> 16)
 }
 
-/// `u32` with wrapping arithmetic, for [`hash32`].
-#[derive(Clone, Copy)]
-struct W32(u32);
-
-impl From<u32> for W32 {
-    #[inline(always)]
-    fn from(x: u32) -> Self {
-        W32(x)
-    }
-}
-impl std::ops::BitXor for W32 {
-    type Output = W32;
-    #[inline(always)]
-    fn bitxor(self, o: W32) -> W32 {
-        W32(self.0 ^ o.0)
-    }
-}
-impl std::ops::Shr<u32> for W32 {
-    type Output = W32;
-    #[inline(always)]
-    fn shr(self, k: u32) -> W32 {
-        W32(self.0 >> k)
-    }
-}
-impl std::ops::Mul for W32 {
-    type Output = W32;
-    #[inline(always)]
-    fn mul(self, o: W32) -> W32 {
-        W32(self.0.wrapping_mul(o.0))
-    }
-}
-
-/// `u32` lanes with the operations [`hash32`] needs (vector `*` wraps).
-#[derive(Clone, Copy)]
-struct U32s(Simd<u32, LANES>);
-
-impl From<u32> for U32s {
-    #[inline(always)]
-    fn from(x: u32) -> Self {
-        U32s(Simd::splat(x))
-    }
-}
-impl std::ops::BitXor for U32s {
-    type Output = U32s;
-    #[inline(always)]
-    fn bitxor(self, o: U32s) -> U32s {
-        U32s(self.0 ^ o.0)
-    }
-}
-impl std::ops::Shr<u32> for U32s {
-    type Output = U32s;
-    #[inline(always)]
-    fn shr(self, k: u32) -> U32s {
-        U32s(self.0 >> Simd::splat(k))
-    }
-}
-impl std::ops::Mul for U32s {
-    type Output = U32s;
-    #[inline(always)]
-    fn mul(self, o: U32s) -> U32s {
-        U32s(self.0 * o.0)
-    }
+/// [`hash32`] in every lane (vector `*` wraps): a single step hashes its 16 nodes at once.
+#[inline(always)]
+fn hash32_lanes(x: Simd<u32, LANES>) -> Simd<u32, LANES> {
+    let k = Simd::splat;
+    let mut h = x ^ k(0x9E37_79B9);
+    h = (h ^ (h >> k(16))) * k(0x85EB_CA6B);
+    h = (h ^ (h >> k(13))) * k(0xC2B2_AE35);
+    h ^ (h >> k(16))
 }
 
 /// Counts splats and sums a checksum of each receiver's cut that does not
@@ -241,14 +177,14 @@ impl CutSink for CutDigest {
     #[inline(always)]
     fn splat(&mut self, receiver: usize, node: NodeId) {
         let s = &mut self.sums.as_mut_array()[receiver];
-        *s = s.wrapping_add(u64::from(hash32(W32(node)).0));
+        *s = s.wrapping_add(u64::from(hash32(node)));
         self.splats += 1;
     }
 
     #[inline(always)]
     fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
         debug_assert!(base == 0, "a packet's receivers start at 0");
-        let h = Simd::splat(u64::from(hash32(W32(node)).0));
+        let h = Simd::splat(u64::from(hash32(node)));
         let m = Mask::<i64, LANES>::from_bitmask(u64::from(lanes));
         self.sums += m.select(h, Simd::splat(0));
         self.splats += u64::from(lanes.count_ones());
@@ -256,7 +192,7 @@ impl CutSink for CutDigest {
 
     #[inline(always)]
     fn splat_nodes(&mut self, receiver: usize, nodes: &[NodeId; LANES], lanes: u16) {
-        let h = hash32(U32s(Simd::from_array(*nodes))).0;
+        let h = hash32_lanes(Simd::from_array(*nodes));
         let m = Mask::<i32, LANES>::from_bitmask(u64::from(lanes));
         let sum = m.select(h, Simd::splat(0)).cast::<u64>().reduce_sum();
         let s = &mut self.sums.as_mut_array()[receiver];
