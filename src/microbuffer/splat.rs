@@ -6,14 +6,18 @@
 //!   weight times `Ω/ΔΩ` ([`plan_small`]);
 //! * a larger cluster: a soft cone ([`plan_cone`]);
 //! * a larger leaf: its disk, ray-traced at the pixel centres of a box
-//!   ([`plan_disk`]); a leaf covering no pixel centre is spread like a small
-//!   splat with `Ω` capped at `ΔΩ`.
+//!   ([`plan_disk`]; a disk whose front no pixel's ray can face is known to
+//!   miss them all without a test); a leaf covering no pixel centre is
+//!   spread like a small splat with `Ω` capped at `ΔΩ`.
 //!
 //! Everything up to the pixel loop — class, bilinear corners and weights,
 //! cone and disk parameters, footprint boxes — is written once over lanes
 //! ([`Real`]), so the 16-lane pipeline computes it for a whole packet in
 //! vector code and the scalar pipeline for one receiver, with the same
-//! operations; only the read-modify-write of pixels is per receiver.
+//! operations. So are the per-pixel cone and disk tests: the scalar pipeline
+//! runs them pixel by pixel, the 16-lane one 16 pixels of one receiver at a
+//! time ([`Tiles`]); only the read-modify-write of pixels is per receiver
+//! and pixel.
 
 use std::simd::prelude::*;
 use std::simd::simd_swizzle;
@@ -70,6 +74,18 @@ pub(crate) struct PixelBox<V> {
 }
 
 impl PixelBox<f32> {
+    /// The same box in every lane.
+    #[inline(always)]
+    fn splat(&self) -> PixelBox<F32s> {
+        let s = F32s::splat;
+        PixelBox {
+            c0: s(self.c0),
+            c1: s(self.c1),
+            r0: s(self.r0),
+            r1: s(self.r1),
+        }
+    }
+
     /// Pixel indices `(c0, c1, r0, r1)`.
     #[inline(always)]
     fn bounds(&self) -> (usize, usize, usize, usize) {
@@ -292,12 +308,7 @@ impl DiskPlan<f32> {
             c: [s(self.c[0]), s(self.c[1]), s(self.c[2])],
             mc: s(self.mc),
             r: s(self.r),
-            bx: PixelBox {
-                c0: s(self.bx.c0),
-                c1: s(self.bx.c1),
-                r0: s(self.bx.r0),
-                r1: s(self.bx.r1),
-            },
+            bx: self.bx.splat(),
         }
     }
 }
@@ -312,12 +323,7 @@ impl ConePlan<f32> {
             inv_s: s(self.inv_s),
             inner2: s(self.inner2),
             outer2: s(self.outer2),
-            bx: PixelBox {
-                c0: s(self.bx.c0),
-                c1: s(self.bx.c1),
-                r0: s(self.bx.r0),
-                r1: s(self.bx.r1),
-            },
+            bx: self.bx.splat(),
         }
     }
 }
