@@ -211,3 +211,60 @@ fn bad_options_are_errors() {
         assert!(render(&scene, &o, &|_, _| {}).is_err());
     }
 }
+
+/// `pbgi bench` (the paper's Table 1): a row per scheme, the scalar
+/// reference first, every scheme cutting what scalar cuts (the bench checks
+/// an order-independent digest of every receiver's cut and fails otherwise),
+/// and the JSON fields the figures are read from.
+#[test]
+fn bench_times_every_scheme_on_the_scalar_cuts() {
+    use pbgi::report::{BenchOptions, bench};
+    let scene = small(cornell_box_glossy());
+    for isa in Isa::available() {
+        let opts = BenchOptions {
+            render: RenderOptions {
+                isa: Some(isa),
+                density: 300.0,
+                ..BenchOptions::default().render
+            },
+            ..BenchOptions::default()
+        };
+        let rows = bench(&scene, &opts, &|_, _| {}).expect("every scheme gives the scalar cuts");
+        let names: Vec<String> = rows.iter().map(|r| r.scheme.to_string()).collect();
+        assert_eq!(names, ["scalar", "single", "packet", "hybrid", "auto"], "{isa}");
+        let scalar = &rows[0];
+        assert!(
+            scalar.receivers > 0 && scalar.splats_per_receiver > 0.0,
+            "{isa}: nothing was cut"
+        );
+        for r in &rows {
+            assert_eq!(r.isa, isa);
+            assert_eq!(
+                r.nodes_per_receiver, scalar.nodes_per_receiver,
+                "{isa} {}",
+                r.scheme
+            );
+            assert_eq!(
+                r.splats_per_receiver, scalar.splats_per_receiver,
+                "{isa} {}",
+                r.scheme
+            );
+            assert!(r.trav_s > 0.0 && r.others_s > 0.0 && r.speedup_vs_scalar.is_finite());
+            let json = r.to_json();
+            for field in [
+                "\"scene\":",
+                "\"scheme\":",
+                "\"isa\":",
+                "\"pre_s\":",
+                "\"trav_s\":",
+                "\"others_s\":",
+                "\"speedup_vs_scalar\":",
+                "\"lane_utilization\":",
+                "\"nodes_per_receiver\":",
+            ] {
+                assert!(json.contains(field), "{json} lacks {field}");
+            }
+        }
+        assert!(rows[0].lane_utilization.is_none() && rows[2].lane_utilization.is_some());
+    }
+}
