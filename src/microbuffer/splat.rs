@@ -336,8 +336,44 @@ impl ConePlan<f32> {
 struct Tile {
     /// Pixel index of the tile's first lane.
     base: usize,
+    /// Grid width (pixels from one row to the next).
+    n: usize,
+    /// Tile width, and its index in [`TILE_COL`] / [`TILE_ROW`].
+    w: usize,
+    shape: usize,
+    /// Rows of the tile inside the box.
+    rows: usize,
     /// Lanes inside the box.
     inside: M32s,
+}
+
+impl Tile {
+    /// The tile's 16 entries of the pixel table `a` (padded by [`LANES`] past
+    /// the last pixel, so that every row load stays inside); rows past
+    /// `rows` repeat the last (their lanes are outside the box).
+    #[inline(always)]
+    fn load(&self, a: &[f32]) -> F32s {
+        let row = |j: usize| self.base + j.min(self.rows - 1) * self.n;
+        match self.w {
+            4 => {
+                let q = |j: usize| Simd::<f32, 4>::from_slice(&a[row(j)..row(j) + 4]);
+                let lo: Simd<f32, 8> = simd_swizzle!(q(0), q(1), [0, 1, 2, 3, 4, 5, 6, 7]);
+                let hi: Simd<f32, 8> = simd_swizzle!(q(2), q(3), [0, 1, 2, 3, 4, 5, 6, 7]);
+                simd_swizzle!(lo, hi, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
+            }
+            8 => {
+                let h = |j: usize| Simd::<f32, 8>::from_slice(&a[row(j)..row(j) + 8]);
+                simd_swizzle!(h(0), h(1), [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
+            }
+            _ => F32s::from_slice(&a[self.base..self.base + LANES]),
+        }
+    }
+
+    /// The pixel of lane `k`.
+    #[inline(always)]
+    fn pixel(&self, k: usize) -> usize {
+        self.base + TILE_ROW[self.shape][k] as usize * self.n + TILE_COL[self.shape][k] as usize
+    }
 }
 
 /// Tile width for a box `cols` pixels wide.
@@ -363,28 +399,6 @@ const TILE_ROW: [[i32; LANES]; 3] = [
     [0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1],
     [0; LANES],
 ];
-
-/// Sixteen pixels of the table `a` (padded by [`LANES`] past the last
-/// pixel, so that every row load stays inside): the tile of width `w` whose
-/// first lane is pixel `base`, rows `n` apart; rows past `rows` repeat the
-/// last (their lanes are outside the box).
-#[inline(always)]
-fn load_tile(a: &[f32], n: usize, base: usize, w: usize, rows: usize) -> F32s {
-    let row = |j: usize| base + j.min(rows - 1) * n;
-    match w {
-        4 => {
-            let q = |j: usize| Simd::<f32, 4>::from_slice(&a[row(j)..row(j) + 4]);
-            let lo: Simd<f32, 8> = simd_swizzle!(q(0), q(1), [0, 1, 2, 3, 4, 5, 6, 7]);
-            let hi: Simd<f32, 8> = simd_swizzle!(q(2), q(3), [0, 1, 2, 3, 4, 5, 6, 7]);
-            simd_swizzle!(lo, hi, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
-        }
-        8 => {
-            let h = |j: usize| Simd::<f32, 8>::from_slice(&a[row(j)..row(j) + 8]);
-            simd_swizzle!(h(0), h(1), [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
-        }
-        _ => F32s::from_slice(&a[base..base + LANES]),
-    }
-}
 
 /// The tiles covering the pixel box `(c0, c1, r0, r1)` of an `n`-wide grid,
 /// row by row of tiles.
@@ -419,10 +433,9 @@ impl Tiles {
 }
 
 impl Iterator for Tiles {
-    /// The tile, and its rows inside the box.
-    type Item = (Tile, usize);
+    type Item = Tile;
     #[inline(always)]
-    fn next(&mut self) -> Option<(Tile, usize)> {
+    fn next(&mut self) -> Option<Tile> {
         if self.r > self.r1 {
             return None;
         }
@@ -436,13 +449,14 @@ impl Iterator for Tiles {
             self.c = self.c0;
             self.r += self.h;
         }
-        Some((
-            Tile {
-                base: r * self.n + c,
-                inside,
-            },
+        Some(Tile {
+            base: r * self.n + c,
+            n: self.n,
+            w: self.w,
+            shape: self.shape,
             rows,
-        ))
+            inside,
+        })
     }
 }
 
@@ -550,14 +564,9 @@ impl MicroBuffer {
     #[inline(always)]
     pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
         let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
-        let n = t.n;
         let (lanes, wl) = (plan.splat(), [w.x, w.y, w.z].map(F32s::splat));
-        let tiles = Tiles::new(n, plan.bx.bounds());
-        let (tw, shape) = (tiles.w, tiles.shape);
-        for (tile, rows) in tiles {
-            let ux = load_tile(&t.dir_x, n, tile.base, tw, rows);
-            let uy = load_tile(&t.dir_y, n, tile.base, tw, rows);
-            let uz = load_tile(&t.dir_z, n, tile.base, tw, rows);
+        for tile in Tiles::new(t.n, plan.bx.bounds()) {
+            let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
             let (m, cover) = lanes.cover(wl, ux, uy, uz);
             let mut hits = (m & tile.inside).to_bitmask();
             if hits == 0 {
@@ -567,7 +576,7 @@ impl MicroBuffer {
             while hits != 0 {
                 let k = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
-                let p = tile.base + TILE_ROW[shape][k] as usize * n + TILE_COL[shape][k] as usize;
+                let p = tile.pixel(k);
                 write_pixel(own, any, cov, p, key, cover[k], 0.5 <= cover[k]);
             }
         }
@@ -580,19 +589,12 @@ impl MicroBuffer {
         if !plan.fronts {
             return false;
         }
-
         let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
-        let n = t.n;
         let lanes = plan.splat();
-        let tiles = Tiles::new(n, plan.bx.bounds());
-        let (tw, shape) = (tiles.w, tiles.shape);
         let mut any_hit = false;
-        for (tile, rows) in tiles {
-            let ux = load_tile(&t.dir_x, n, tile.base, tw, rows);
-            let uy = load_tile(&t.dir_y, n, tile.base, tw, rows);
-            let uz = load_tile(&t.dir_z, n, tile.base, tw, rows);
-            let delta = load_tile(&t.pixel_size, n, tile.base, tw, rows);
-            let (m, depth, cover) = lanes.hit(ux, uy, uz, delta);
+        for tile in Tiles::new(t.n, plan.bx.bounds()) {
+            let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
+            let (m, depth, cover) = lanes.hit(ux, uy, uz, tile.load(&t.pixel_size));
             let mut hits = (m & tile.inside).to_bitmask();
             if hits == 0 {
                 continue;
@@ -602,7 +604,7 @@ impl MicroBuffer {
             while hits != 0 {
                 let k = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
-                let p = tile.base + TILE_ROW[shape][k] as usize * n + TILE_COL[shape][k] as usize;
+                let p = tile.pixel(k);
                 write_pixel(own, any, cov, p, key(depth[k], node), cover[k], 0.5 <= cover[k]);
             }
         }
