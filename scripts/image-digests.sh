@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Renders every built-in scene in a few modes and prints one SHA-256 per
+# image (of the linear EXR). `scripts/image-digests.sh --check` compares
+# with docs/image-digests.txt: a change that is meant to move no pixel (a
+# refactoring) must leave every line as it is; one that changes images
+# updates the file in the same commit and says why.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --quiet --bin pbgi
+PBGI=${CARGO_TARGET_DIR:-target}/release/pbgi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cases=(
+    "cornell-box"
+    "cornell-box --ao --spp 1"
+    "cornell-box --bounces 2 --spp 1"
+    "cornell-box --scheme scalar --spp 1"
+    "cornell-box --scheme hybrid --spp 1"
+    "cornell-box-glossy --spp 1"
+    "nave --spp 1"
+)
+out="$tmp/digests.txt"
+for c in "${cases[@]}"; do
+    # shellcheck disable=SC2086
+    "$PBGI" render $c -o "$tmp/img.exr" > /dev/null 2>&1
+    printf '%s  %s\n' "$(sha256sum "$tmp/img.exr" | cut -c1-16)" "$c" >> "$out"
+done
+if [ "${1:-}" = "--check" ]; then
+    diff -u docs/image-digests.txt "$out" && echo "image digests: all ${#cases[@]} unchanged"
+else
+    cat "$out"
+fi
