@@ -63,7 +63,7 @@ fn traversal(c: &mut Criterion) {
             let receivers: Vec<Receiver> = synthetic::receivers(TILES, 0.01, jitter, RECEIVER_SEED);
             let stats = trav.run(Scheme::Scalar, &receivers, &mut SplatCounter::default());
             println!(
-                "box-{n} ({} surfels, {} nodes) {set}: {:.0} nodes tested per receiver, omega {}",
+                "box-{n} ({} surfels, {} nodes) {set}: {:.0} nodes tested per receiver, max_solid_angle {}",
                 cloud.len(),
                 tree.len(),
                 stats.nodes_per_receiver(),

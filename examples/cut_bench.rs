@@ -3,14 +3,14 @@
 //!
 //! ```text
 //! cargo run --release --example cut_bench -- [--json] [--surfels N[,N...]] [--tiles T]
-//!     [--omega W] [--isa all|NAME[,NAME...]] [--threshold H]
+//!     [--max_solid_angle W] [--isa all|NAME[,NAME...]] [--threshold H]
 //! ```
 //!
 //! * `--surfels`: cloud sizes (`box_with_blocks`), e.g. `10000,1e5,1e6`; default `1e4,1e5`.
 //! * `--tiles`: packets of 16 receivers per set (default 128); each cloud gets a
 //!   coherent set (4×4 tiles, surface normals) and an incoherent one (the same
 //!   kind of tiles with jittered normals).
-//! * `--omega`: Ω, the largest solid angle a splatted node may subtend (default 0.05).
+//! * `--max_solid_angle`: Ω, the largest solid angle a splatted node may subtend (default 0.05).
 //! * `--isa`: `all` (default: every path this CPU runs) or a list of names.
 //! * `--threshold`: the hybrid scheme's switch threshold (default 4).
 //! * `--json`: one JSON object per line per (cloud, receivers, scheme, isa)
@@ -37,14 +37,14 @@ const SPACING: f32 = 0.01;
 const MIN_TIME: Duration = Duration::from_millis(300);
 const WARM_UP: Duration = Duration::from_millis(50);
 
-const USAGE: &str = "usage: cut_bench [--json] [--surfels N[,N...]] [--tiles T] [--omega W] \
+const USAGE: &str = "usage: cut_bench [--json] [--surfels N[,N...]] [--tiles T] [--max_solid_angle W] \
                      [--isa all|NAME[,NAME...]] [--threshold H]";
 
 struct Args {
     json: bool,
     surfels: Vec<usize>,
     tiles: usize,
-    omega: f32,
+    max_solid_angle: f32,
     isas: Vec<Isa>,
     threshold: u32,
 }
@@ -73,7 +73,7 @@ fn parse_args() -> Result<Args, String> {
         json: false,
         surfels: vec![10_000, 100_000],
         tiles: 128,
-        omega: defaults.max_solid_angle,
+        max_solid_angle: defaults.max_solid_angle,
         isas: Isa::available(),
         threshold: defaults.hybrid_threshold,
     };
@@ -94,9 +94,9 @@ fn parse_args() -> Result<Args, String> {
             "--json" => args.json = true,
             "--surfels" => args.surfels = value()?.split(',').map(parse_count).collect::<Result<_, _>>()?,
             "--tiles" => args.tiles = parse_count(&value()?)?,
-            "--omega" => {
+            "--max_solid_angle" => {
                 let v = value()?;
-                args.omega = v.parse().map_err(|_| format!("--omega: `{v}` is not a number"))?;
+                args.max_solid_angle = v.parse().map_err(|_| format!("--max_solid_angle: `{v}` is not a number"))?;
             }
             "--threshold" => {
                 let v = value()?;
@@ -201,7 +201,7 @@ fn main() -> ExitCode {
     let empty = Tree::build(&pbgi::PointCloud::default());
     for &isa in &args.isas {
         let options = CutOptions {
-            max_solid_angle: args.omega,
+            max_solid_angle: args.max_solid_angle,
             hybrid_threshold: args.threshold,
             isa: Some(isa),
         };
@@ -224,9 +224,9 @@ fn main() -> ExitCode {
     if !args.json {
         let isas: Vec<&str> = args.isas.iter().map(|i| i.name()).collect();
         out!(
-            "pbgi cut_bench: omega {}, hybrid threshold {}, {} receivers per set ({} tiles of 16), \
+            "pbgi cut_bench: max_solid_angle {}, hybrid threshold {}, {} receivers per set ({} tiles of 16), \
              isa {}, traversal on one thread (min of repeats >= {:.1} s)",
-            args.omega,
+            args.max_solid_angle,
             args.threshold,
             args.tiles * 16,
             args.tiles,
@@ -268,7 +268,7 @@ fn main() -> ExitCode {
             let mut first_scalar: Option<(Isa, Vec<Cut>)> = None;
             for &isa in &args.isas {
                 let options = CutOptions {
-                    max_solid_angle: args.omega,
+                    max_solid_angle: args.max_solid_angle,
                     hybrid_threshold: args.threshold,
                     isa: Some(isa),
                 };
@@ -322,14 +322,14 @@ fn main() -> ExitCode {
                             line,
                             "{{\"cloud\":\"{cloud_name}\",\"receiver_set\":\"{set}\",\"scheme\":\"{scheme}\",\
                              \"isa\":\"{isa}\",\"receivers\":{},\"seconds\":{},\"speedup_vs_scalar\":{},\
-                             \"nodes_per_receiver\":{},\"lane_utilization\":{},\"surfels\":{},\"omega\":{}}}",
+                             \"nodes_per_receiver\":{},\"lane_utilization\":{},\"surfels\":{},\"max_solid_angle\":{}}}",
                             receivers.len(),
                             json_num(seconds),
                             json_num(speedup),
                             json_num(stats.nodes_per_receiver()),
                             util.map_or("null".into(), json_num),
                             cloud.len(),
-                            args.omega, // f32: shortest form, e.g. 0.05
+                            args.max_solid_angle, // f32: shortest form, e.g. 0.05
                         )
                         .unwrap();
                         out!("{line}");

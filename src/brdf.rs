@@ -67,7 +67,7 @@ impl GlossyLobe {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synthetic::Rng;
+    use crate::rng::Rng;
 
     /// ∫ f_s cosθ dω over the hemisphere, by importance sampling the lobe.
     fn albedo(lobe: &GlossyLobe, n: Vec3, wo: Vec3) -> f32 {

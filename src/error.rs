@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use crate::cut::Isa;
+use crate::simd::IsaError;
 
 /// What is wrong with one input value.
 #[derive(Clone, Debug, PartialEq)]
@@ -75,19 +75,8 @@ pub enum Error {
         /// The most accepted.
         max: usize,
     },
-    /// The requested instruction-set path cannot run on this CPU (or was not
-    /// compiled for this architecture).
-    IsaUnavailable {
-        /// The path asked for.
-        requested: Isa,
-        /// The paths this CPU can run, best first.
-        available: Vec<Isa>,
-    },
-    /// `PBGI_ISA` or a parsed name is not a known path.
-    UnknownIsa {
-        /// The text given.
-        value: String,
-    },
+    /// The instruction-set path asked for is unknown or cannot run here.
+    Isa(IsaError),
     /// A scheme name is not known.
     UnknownScheme {
         /// The text given.
@@ -123,19 +112,7 @@ impl fmt::Display for Error {
             Error::TooManySurfels { count, max } => {
                 write!(f, "{count} surfels given, at most {max} supported")
             }
-            Error::IsaUnavailable { requested, available } => {
-                let names: Vec<_> = available.iter().map(|i| i.name()).collect();
-                write!(
-                    f,
-                    "instruction set {} is not available on this CPU (available: {})",
-                    requested.name(),
-                    names.join(", ")
-                )
-            }
-            Error::UnknownIsa { value } => write!(
-                f,
-                "unknown instruction set {value:?} (expected auto, avx512, avx2, neon or portable)"
-            ),
+            Error::Isa(e) => e.fmt(f),
             Error::UnknownScheme { value } => write!(
                 f,
                 "unknown traversal scheme {value:?} (expected scalar, single, packet or hybrid)"
@@ -144,4 +121,17 @@ impl fmt::Display for Error {
     }
 }
 
-impl std::error::Error for Error {}
+impl std::error::Error for Error {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Error::Isa(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<IsaError> for Error {
+    fn from(e: IsaError) -> Self {
+        Error::Isa(e)
+    }
+}

@@ -72,30 +72,37 @@
 #![feature(portable_simd)]
 #![warn(missing_docs)]
 
-pub mod brdf;
-pub mod cut;
+// Modules in data-flow order: the SIMD vocabulary and dispatch, the kernel
+// layer's data (errors, surfels, tree), cuts, the microbuffer; then, behind
+// the `render` feature, scenes, the renderer and the report.
+pub mod simd;
+
 pub mod error;
-#[cfg(feature = "render")]
-pub mod light;
-pub mod microbuffer;
 pub mod points;
-#[cfg(feature = "render")]
-pub mod reference;
-#[cfg(feature = "render")]
-pub mod render;
-#[cfg(feature = "render")]
-pub mod report;
-#[cfg(feature = "render")]
-pub mod scene;
-pub mod synthetic;
-#[cfg(feature = "render")]
-pub mod trace;
 pub mod tree;
 
+pub mod cut;
+
+pub mod brdf;
+pub mod microbuffer;
+
+pub mod rng;
+pub mod synthetic;
+
+#[cfg(feature = "render")]
+pub mod scene;
+
+#[cfg(feature = "render")]
+pub mod render;
+
+#[cfg(feature = "render")]
+pub mod report;
+
 pub use cut::{
-    AUTO_SINGLE_BELOW, Cut, CutOptions, CutRecorder, CutSink, Isa, LANES, Outcome, Receiver, Scheme,
+    AUTO_SINGLE_BELOW, Cut, CutOptions, CutRecorder, CutSink, Outcome, Receiver, Scheme, SchemeChoice,
     SplatCounter, Traversal, TraversalStats, auto_scheme,
 };
 pub use error::{Error, Invalid};
 pub use points::{PointCloud, Surfel};
+pub use simd::{Isa, IsaError, LANES};
 pub use tree::{NodeId, NodeView, Tree};

@@ -1,7 +1,6 @@
 //! Surfels: the oriented disks that carry the scene's outgoing radiance.
 
 #[cfg(feature = "render")]
-pub mod bake;
 
 use glam::Vec3;
 

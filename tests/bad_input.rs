@@ -11,10 +11,8 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use pbgi::microbuffer::MicroBuffer;
-use pbgi::points::bake::{BakeOptions, bake};
 use pbgi::points::{MAX_COORDINATE, MAX_RADIANCE};
-use pbgi::reference::{ReferenceOptions, render_reference};
-use pbgi::render::{RenderOptions, render};
+use pbgi::render::{BakeOptions, ReferenceOptions, RenderOptions, bake, render, render_reference};
 use pbgi::scene::builtin::cornell_box;
 use pbgi::scene::load::load;
 use pbgi::scene::{Glossy, Light, Scene};
@@ -318,7 +316,10 @@ fn render_options_and_scenes() {
         (
             "Ω NaN",
             quick(RenderOptions {
-                max_solid_angle: f32::NAN,
+                cut: CutOptions {
+                    max_solid_angle: f32::NAN,
+                    ..d.cut
+                },
                 ..d
             }),
             "max_solid_angle",
@@ -326,7 +327,10 @@ fn render_options_and_scenes() {
         (
             "Ω −1",
             quick(RenderOptions {
-                max_solid_angle: -1.0,
+                cut: CutOptions {
+                    max_solid_angle: -1.0,
+                    ..d.cut
+                },
                 ..d
             }),
             "max_solid_angle",
@@ -334,7 +338,10 @@ fn render_options_and_scenes() {
         (
             "hybrid threshold 99",
             quick(RenderOptions {
-                hybrid_threshold: 99,
+                cut: CutOptions {
+                    hybrid_threshold: 99,
+                    ..d.cut
+                },
                 ..d
             }),
             "hybrid_threshold",
@@ -411,8 +418,8 @@ fn render_options_and_scenes() {
             err(render_reference(&scene, &o, &|_, _| {}))
         }));
     }
-    let tracer = pbgi::trace::Tracer::new(&scene);
-    let lights = pbgi::light::Lights::new(&scene);
+    let tracer = pbgi::render::Tracer::new(&scene);
+    let lights = pbgi::render::Lights::new(&scene);
     count += 1;
     failures.extend(check("bake density NaN", &want(&["density"]), || {
         let o = BakeOptions {

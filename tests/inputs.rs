@@ -9,7 +9,7 @@ mod common;
 
 use common::{CloudSpec, Rng, path_names, qc};
 use glam::Vec3;
-use pbgi::{CutOptions, Error, Invalid, Isa, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
+use pbgi::{CutOptions, Error, Invalid, Isa, IsaError, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 use quickcheck::{Arbitrary, Gen, TestResult};
 
 fn ok() -> Surfel {
@@ -431,7 +431,7 @@ fn isa_names_and_availability() {
         let e = bad.parse::<Isa>().unwrap_err();
         assert_eq!(
             e,
-            Error::UnknownIsa {
+            IsaError::Unknown {
                 value: bad.to_string()
             }
         );
@@ -471,28 +471,26 @@ fn isa_names_and_availability() {
         } else {
             // Asking for a path this CPU lacks is an error, never an illegal instruction.
             let e = r.unwrap_err();
-            assert_eq!(
-                e,
-                Error::IsaUnavailable {
-                    requested: isa,
-                    available: available.clone()
-                }
-            );
+            let expected = IsaError::Unavailable {
+                requested: isa,
+                available: available.clone(),
+            };
+            assert_eq!(e, Error::Isa(expected.clone()));
             assert!(e.to_string().contains(isa.name()), "{e}");
-            assert_eq!(isa.require(), Err(e));
+            assert_eq!(isa.require(), Err(expected));
         }
     }
     #[cfg(target_arch = "x86_64")]
     assert!(matches!(
         Isa::Neon.require(),
-        Err(Error::IsaUnavailable {
+        Err(IsaError::Unavailable {
             requested: Isa::Neon,
             ..
         })
     ));
     #[cfg(target_arch = "aarch64")]
     for isa in [Isa::Avx2, Isa::Avx512] {
-        assert!(matches!(isa.require(), Err(Error::IsaUnavailable { .. })));
+        assert!(matches!(isa.require(), Err(IsaError::Unavailable { .. })));
     }
     eprintln!("isa: paths {}", path_names());
 }

@@ -1,9 +1,9 @@
 //! Whole renders: every scheme and path gives the same image bit for bit;
 //! the stages a scene does not need are left out; no NaN leaves the renderer.
 
-use pbgi::render::{RenderOptions, SchemeChoice, render};
+use pbgi::render::{RenderOptions, render};
 use pbgi::scene::builtin::{cornell_box, cornell_box_glossy};
-use pbgi::{Isa, Scheme};
+use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 fn small(mut s: pbgi::scene::Scene) -> pbgi::scene::Scene {
     // Fewer pixels when `PBGI_QC_TESTS` asks for few cases (emulated runs).
@@ -19,7 +19,10 @@ fn small(mut s: pbgi::scene::Scene) -> pbgi::scene::Scene {
 fn opts(scheme: Scheme, isa: Isa) -> RenderOptions {
     RenderOptions {
         scheme: SchemeChoice::Fixed(scheme),
-        isa: Some(isa),
+        cut: CutOptions {
+            isa: Some(isa),
+            ..Default::default()
+        },
         spp: 2,
         density: 300.0,
         ..Default::default()
@@ -204,7 +207,10 @@ fn bad_options_are_errors() {
             ..Default::default()
         },
         RenderOptions {
-            max_solid_angle: f32::NAN,
+            cut: CutOptions {
+                max_solid_angle: f32::NAN,
+                ..Default::default()
+            },
             ..Default::default()
         },
     ] {
@@ -223,7 +229,10 @@ fn bench_times_every_scheme_on_the_scalar_cuts() {
     for isa in Isa::available() {
         let opts = BenchOptions {
             render: RenderOptions {
-                isa: Some(isa),
+                cut: CutOptions {
+                    isa: Some(isa),
+                    ..Default::default()
+                },
                 density: 300.0,
                 ..BenchOptions::default().render
             },

@@ -8,11 +8,11 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use pbgi::render::{Image, RenderOptions, RenderOutput, SchemeChoice, render};
+use pbgi::render::{Image, ReferenceOptions, RenderOptions, RenderOutput, render, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
 use pbgi::scene::load::resolve;
-use pbgi::{Isa, Scheme};
+use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
 #[command(name = "pbgi", version, about = "Point-based global illumination renderer")]
@@ -82,7 +82,7 @@ struct ReportArgs {
         value_delimiter = ',',
         default_value = "0.3,0.1,0.05,0.02,0.01,0.005,0.002,0.001"
     )]
-    omegas: Vec<f32>,
+    max_solid_angles: Vec<f32>,
     /// Microbuffer resolutions swept besides the default (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "8,16")]
     microbuffers: Vec<usize>,
@@ -97,7 +97,7 @@ struct ReportArgs {
     replot: bool,
     /// Leave out the Ω = 0 image (every leaf splatted; the slowest point).
     #[arg(long)]
-    no_omega_zero: bool,
+    no_max_solid_angle_zero: bool,
     /// Camera samples per pixel of the point-based images.
     #[arg(long, default_value_t = RenderOptions::default().spp)]
     spp: u32,
@@ -111,23 +111,24 @@ struct ReportArgs {
     settings: Settings,
 }
 
-/// Point-based settings shared by `bench` and `report`.
+/// Point-based settings shared by `render`, `bench` and `report`: each
+/// option once, its default from [`RenderOptions::default`].
 #[derive(Args, Clone)]
 struct Settings {
-    /// Ω: largest solid angle (sr) of a splatted cluster (the report's default point).
-    #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
+    /// Ω: largest solid angle (sr) of a splatted cluster.
+    #[arg(long, default_value_t = CutOptions::default().max_solid_angle)]
     max_solid_angle: f32,
     /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
     microbuffer: usize,
-    /// Indirect bounces: 0 direct only, 1 = direct + one bounce.
+    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
     #[arg(long, default_value_t = RenderOptions::default().bounces)]
     bounces: u32,
     /// Surfels per unit area.
     #[arg(long, default_value_t = RenderOptions::default().density)]
     density: f32,
     /// Hybrid: switch an entry to single below this many active lanes.
-    #[arg(long, default_value_t = RenderOptions::default().hybrid_threshold)]
+    #[arg(long, default_value_t = CutOptions::default().hybrid_threshold)]
     hybrid_threshold: u32,
     /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
     #[arg(long)]
@@ -137,13 +138,15 @@ struct Settings {
 impl Settings {
     fn options(&self, spp: u32) -> Res<RenderOptions> {
         Ok(RenderOptions {
-            max_solid_angle: self.max_solid_angle,
+            cut: CutOptions {
+                max_solid_angle: self.max_solid_angle,
+                hybrid_threshold: self.hybrid_threshold,
+                isa: parse_isa(&self.isa)?,
+            },
             microbuffer: self.microbuffer,
             bounces: self.bounces,
             spp,
             density: self.density,
-            hybrid_threshold: self.hybrid_threshold,
-            isa: parse_isa(&self.isa)?,
             ..RenderOptions::default()
         })
     }
@@ -155,16 +158,7 @@ fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
 
 /// Scheme names, `auto` included.
 fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
-    names
-        .iter()
-        .map(|n| {
-            Ok(if n.trim().eq_ignore_ascii_case("auto") {
-                SchemeChoice::Auto
-            } else {
-                SchemeChoice::Fixed(n.trim().parse::<Scheme>()?)
-            })
-        })
-        .collect()
+    names.iter().map(|n| Ok(n.parse::<SchemeChoice>()?)).collect()
 }
 
 /// SCENE's help: the names (see `pbgi scenes` for which are present).
@@ -200,15 +194,6 @@ struct RenderArgs {
     /// Traversal scheme: auto, scalar, single, packet or hybrid.
     #[arg(long, default_value = "auto")]
     scheme: String,
-    /// Ω: largest solid angle (sr) of a splatted cluster.
-    #[arg(long, default_value_t = RenderOptions::default().max_solid_angle)]
-    max_solid_angle: f32,
-    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
-    #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
-    microbuffer: usize,
-    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
-    #[arg(long, default_value_t = RenderOptions::default().bounces)]
-    bounces: u32,
     /// Stratified camera samples per pixel (each a receiver); also direct-light samples.
     #[arg(long, default_value_t = RenderOptions::default().spp)]
     spp: u32,
@@ -218,15 +203,8 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
-    #[arg(long)]
-    isa: Option<String>,
-    /// Surfels per unit area.
-    #[arg(long, default_value_t = RenderOptions::default().density)]
-    density: f32,
-    /// Hybrid: switch an entry to single below this many active lanes.
-    #[arg(long, default_value_t = RenderOptions::default().hybrid_threshold)]
-    hybrid_threshold: u32,
+    #[command(flatten)]
+    settings: Settings,
 }
 
 impl Default for RenderArgs {
@@ -268,22 +246,10 @@ fn parse_isa(s: &Option<String>) -> Res<Option<Isa>> {
 }
 
 fn options(a: &RenderArgs) -> Res<RenderOptions> {
-    let scheme = if a.scheme.eq_ignore_ascii_case("auto") {
-        SchemeChoice::Auto
-    } else {
-        SchemeChoice::Fixed(a.scheme.parse::<Scheme>()?)
-    };
     Ok(RenderOptions {
-        scheme,
-        max_solid_angle: a.max_solid_angle,
-        hybrid_threshold: a.hybrid_threshold,
-        microbuffer: a.microbuffer,
-        bounces: a.bounces,
-        spp: a.spp,
+        scheme: a.scheme.parse()?,
         ao: a.ao,
-        density: a.density,
-        isa: parse_isa(&a.isa)?,
-        ..RenderOptions::default()
+        ..a.settings.options(a.spp)?
     })
 }
 
@@ -379,13 +345,13 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
     let bar = progress_bar("rows", format!("path tracing {}", scene.name));
-    let opts = pbgi::reference::ReferenceOptions {
+    let opts = ReferenceOptions {
         spp: a.spp,
         bounces: a.bounces,
         ..Default::default()
     };
     let out = pool.install(|| {
-        pbgi::reference::render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
+        render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
     })?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
@@ -464,7 +430,7 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
             SchemeChoice::Fixed(s) => s.to_string(),
         },
         out.isa,
-        opts.max_solid_angle,
+        opts.cut.max_solid_angle,
         opts.microbuffer,
         threads
     );
@@ -554,7 +520,7 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
         },
         first.isa,
         first.threads,
-        o.max_solid_angle,
+        o.cut.max_solid_angle,
         o.microbuffer
     );
     println!(
@@ -631,13 +597,13 @@ fn cmd_report(a: &ReportArgs) -> Res<()> {
             "rows",
             format!("path tracing the reference, {} spp", a.reference_spp),
         );
-        let opts = pbgi::reference::ReferenceOptions {
+        let opts = ReferenceOptions {
             spp: a.reference_spp,
             bounces: a.settings.bounces as i32,
             ..Default::default()
         };
         let out = pool.install(|| {
-            pbgi::reference::render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
+            render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
         })?;
         bar.finish_and_clear();
         write_image(&out.image, &ref_path)?;
@@ -664,10 +630,10 @@ fn cmd_report(a: &ReportArgs) -> Res<()> {
     render_opts.direct_samples = Some(a.direct_samples);
     let sweep = SweepOptions {
         render: render_opts,
-        omegas: a.omegas.clone(),
+        max_solid_angles: a.max_solid_angles.clone(),
         microbuffers: a.microbuffers.clone(),
         schemes: parse_schemes(&a.schemes)?,
-        omega_zero: !a.no_omega_zero,
+        max_solid_angle_zero: !a.no_max_solid_angle_zero,
         path_tracer_spp: a.path_tracer_spp.clone(),
         bounces: a.settings.bounces,
     };

@@ -11,6 +11,7 @@
 
 use super::single::{self, PairStack};
 use super::{CutSink, Receiver, Traversal, TraversalStats};
+use crate::simd::set_bits;
 
 /// Finishes the subtree of `node` for each lane of `mask` with single traversal.
 #[inline(always)]
@@ -26,12 +27,7 @@ pub(crate) fn finish<S: CutSink>(
     stats: &mut TraversalStats,
 ) {
     stats.switches += 1;
-    // A plain loop, not `for_each_lane`: a closure this large is not inlined,
-    // and an out-of-line closure is compiled for the baseline target, not the clone's.
-    let mut bits = mask;
-    while bits != 0 {
-        let l = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
+    for l in set_bits(mask) {
         scratch.clear();
         scratch.push_node(node);
         single::traverse(t, &receivers[l].lanes(), base + l, scratch, sink, stats);

@@ -3,9 +3,10 @@
 //! paper's node queue and mask queue).
 
 use super::hybrid;
-use super::node_test::{F32s, LANES, ReceiverLanes, classify, for_each_lane, lane_mask, load_node};
+use super::classify::{ReceiverLanes, classify, load_node};
 use super::single::PairStack;
 use super::{CutSink, Receiver, Traversal, TraversalStats};
+use crate::simd::{F32s, LANES, lane_mask, set_bits};
 use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
 /// Receivers `base..base + receivers.len()` (at most 16) as lanes; unused
@@ -54,7 +55,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
         return;
     }
     let recs = load_receivers(receivers);
-    let omega = F32s::splat(t.omega);
+    let max_solid_angle = F32s::splat(t.max_solid_angle);
     // Depth first, both children pushed: at most depth + 1 entries.
     let mut nodes = [0u32; MAX_DEPTH + 2];
     let mut masks = [0u16; MAX_DEPTH + 2];
@@ -74,7 +75,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
 
         let node = load_node(a, k).splat();
         let child = a.child(k);
-        let (discard, far) = classify(&node, &recs, omega);
+        let (discard, far) = classify(&node, &recs, max_solid_angle);
         let discard = discard.to_bitmask() as u16 & mask;
         let kept = mask & !discard;
         let (splat, traverse) = if child & LEAF_BIT != 0 {
@@ -85,7 +86,9 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
         };
         sink.splat_receivers(base, k, splat);
         if S::DISCARDS {
-            for_each_lane(discard, |l| sink.discard(base + l, k));
+            for l in set_bits(discard) {
+                sink.discard(base + l, k);
+            }
         }
         if traverse != 0 {
             let left = NodeArrays::first_of_pair(child);

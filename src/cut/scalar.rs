@@ -2,7 +2,7 @@
 //! fixed-size stack, the node test short-circuited. Every speed-up is measured
 //! against this, so it is kept as fast as plain scalar code gets.
 
-use super::node_test::{Outcome, ReceiverLanes, load_node, outcome_scalar};
+use super::classify::{Outcome, ReceiverLanes, load_node, outcome_scalar};
 use super::{CutSink, Traversal};
 use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
@@ -28,7 +28,7 @@ pub(crate) fn traverse<S: CutSink>(
         tests += 1;
         let node = load_node(a, k);
         let child = a.child(k);
-        match outcome_scalar(&node, rec, t.omega, child & LEAF_BIT != 0) {
+        match outcome_scalar(&node, rec, t.max_solid_angle, child & LEAF_BIT != 0) {
             Outcome::Discard => {
                 if S::DISCARDS {
                     sink.discard(index, k);

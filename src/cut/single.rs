@@ -10,8 +10,9 @@
 
 use std::simd::{Select, prelude::*};
 
-use super::node_test::{F32s, LANES, NodeLanes, ReceiverLanes, classify, lane_mask};
+use super::classify::{NodeLanes, ReceiverLanes, classify};
 use super::{CutSink, Traversal, TraversalStats};
+use crate::simd::{F32s, LANES, lane_mask, set_bits};
 use crate::tree::{LEAF_BIT, NodeArrays, PairRecord, field};
 
 /// Entries per step.
@@ -168,7 +169,7 @@ fn step<S: CutSink, const FLAGS: bool>(
     let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
         pairs[l / 2].child[l & 1]
     }));
-    let (discard, far) = classify(&node, rec, F32s::splat(t.omega));
+    let (discard, far) = classify(&node, rec, F32s::splat(t.max_solid_angle));
     let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
 
     let valid = lane_mask(2 * count) & !skipped;
@@ -189,7 +190,9 @@ fn step<S: CutSink, const FLAGS: bool>(
     let node_ids = (lane_entry * Simd::splat(2) + slot - Simd::splat(1)).to_array();
     sink.splat_nodes(index, &node_ids, splat);
     if S::DISCARDS {
-        super::node_test::for_each_lane(discard, |l| sink.discard(index, node_ids[l]));
+        for l in set_bits(discard) {
+            sink.discard(index, node_ids[l]);
+        }
     }
     // Branch-free push of every traversed lane's child pair. Every lane
     // writes, so the slack past `len` must only ever hold valid entries:

@@ -13,11 +13,12 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cut::LANES;
-use crate::cut::{CutSink, Isa, Scheme, TraversalStats, auto_scheme};
+use crate::cut::{CutSink, Scheme, SchemeChoice, TraversalStats};
 use crate::microbuffer::MicroBuffer;
-use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions, SchemeChoice};
+use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions};
+use crate::rng::mix;
 use crate::scene::Scene;
+use crate::simd::{Isa, LANES};
 use crate::tree::NodeId;
 
 /// Benchmark settings.
@@ -132,15 +133,6 @@ pub(crate) fn json_escape(s: &str) -> String {
             c => vec![c],
         })
         .collect()
-}
-
-/// SplitMix64's finalizer: spreads a node index over 64 bits.
-#[inline]
-fn mix(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 /// murmur3's 32-bit finalizer: spreads a node index over 32 bits.
@@ -267,10 +259,7 @@ pub fn bench(
                         sums: Simd::splat(0),
                         splats: 0,
                     };
-                    let scheme = match choice {
-                        SchemeChoice::Fixed(s) => s,
-                        SchemeChoice::Auto => auto_scheme(p.receivers.len()),
-                    };
+                    let scheme = choice.resolve(p.receivers.len());
                     let stats = traversal.run(scheme, &p.receivers, &mut sink);
                     let digest = sink.sums.as_array()[..p.receivers.len()]
                         .iter()

@@ -16,11 +16,11 @@ pub mod plot;
 
 use std::fmt::Write as _;
 
-use crate::cut::Scheme;
-use crate::reference::{ReferenceOptions, render_reference};
-use crate::render::{Image, RenderError, RenderOptions, SchemeChoice, render, shading_point};
+use crate::cut::{CutOptions, Scheme, SchemeChoice};
+use crate::render::{
+    Image, ReferenceOptions, RenderError, RenderOptions, Tracer, render, render_reference, shading_point,
+};
 use crate::scene::Scene;
-use crate::trace::Tracer;
 
 pub use bench::{BenchOptions, BenchRow, bench};
 
@@ -93,7 +93,7 @@ pub enum Method {
         /// Traversal scheme.
         scheme: Scheme,
         /// Solid-angle threshold Ω (0: every leaf splatted).
-        omega: f32,
+        max_solid_angle: f32,
         /// Microbuffer resolution.
         microbuffer: usize,
     },
@@ -127,14 +127,14 @@ pub struct SweepOptions {
     /// Settings of every point-based image but those varied.
     pub render: RenderOptions,
     /// Ω values, swept for every scheme at the default microbuffer resolution.
-    pub omegas: Vec<f32>,
-    /// Microbuffer resolutions, swept with `omegas` for the first scheme.
+    pub max_solid_angles: Vec<f32>,
+    /// Microbuffer resolutions, swept with `max_solid_angles` for the first scheme.
     pub microbuffers: Vec<usize>,
     /// Schemes (images are identical across schemes; their times differ).
     pub schemes: Vec<Scheme>,
     /// Also render the Ω = 0 image (every leaf splatted; slow): it splits
     /// the hierarchy's error from the point discretization's.
-    pub omega_zero: bool,
+    pub max_solid_angle_zero: bool,
     /// Paths per pixel of the path tracer's points.
     pub path_tracer_spp: Vec<u32>,
     /// Indirect bounces for both renderers.
@@ -148,10 +148,10 @@ impl Default for SweepOptions {
                 direct_samples: Some(16),
                 ..RenderOptions::default()
             },
-            omegas: vec![0.3, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001],
+            max_solid_angles: vec![0.3, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001],
             microbuffers: vec![8, 16],
             schemes: Scheme::ALL.to_vec(),
-            omega_zero: true,
+            max_solid_angle_zero: true,
             path_tracer_spp: vec![1, 4, 16, 64, 256],
             bounces: 1,
         }
@@ -164,28 +164,28 @@ impl SweepOptions {
         let default_n = self.render.microbuffer;
         let mut v = Vec::new();
         for &scheme in &self.schemes {
-            for &omega in &self.omegas {
+            for &max_solid_angle in &self.max_solid_angles {
                 v.push(Method::PointBased {
                     scheme,
-                    omega,
+                    max_solid_angle,
                     microbuffer: default_n,
                 });
             }
         }
         if let Some(&scheme) = self.schemes.first() {
             for &n in self.microbuffers.iter().filter(|&&n| n != default_n) {
-                for &omega in &self.omegas {
+                for &max_solid_angle in &self.max_solid_angles {
                     v.push(Method::PointBased {
                         scheme,
-                        omega,
+                        max_solid_angle,
                         microbuffer: n,
                     });
                 }
             }
-            if self.omega_zero {
+            if self.max_solid_angle_zero {
                 v.push(Method::PointBased {
                     scheme,
-                    omega: 0.0,
+                    max_solid_angle: 0.0,
                     microbuffer: default_n,
                 });
             }
@@ -218,7 +218,7 @@ pub fn error_sweep(
     for (i, method) in opts.point_based().into_iter().enumerate() {
         let Method::PointBased {
             scheme,
-            omega,
+            max_solid_angle,
             microbuffer,
         } = method
         else {
@@ -227,11 +227,14 @@ pub fn error_sweep(
         progress(
             i,
             total,
-            &format!("{scheme}, Ω {omega}, microbuffer {microbuffer}"),
+            &format!("{scheme}, Ω {max_solid_angle}, microbuffer {microbuffer}"),
         );
         let ro = RenderOptions {
+            cut: CutOptions {
+                max_solid_angle,
+                ..opts.render.cut
+            },
             scheme: SchemeChoice::Fixed(scheme),
-            max_solid_angle: omega,
             microbuffer,
             bounces: opts.bounces,
             ..opts.render
@@ -299,17 +302,17 @@ pub fn path_tracer_time_for(points: &[ErrorPoint], error: f64) -> Option<f64> {
 /// The sweep as CSV: one line per image.
 pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
     let mut s =
-        String::from("scene,method,scheme,omega,microbuffer,spp,pre_s,trav_s,others_s,total_s,rel_rmse\n");
+        String::from("scene,method,scheme,max_solid_angle,microbuffer,spp,pre_s,trav_s,others_s,total_s,rel_rmse\n");
     for p in points {
-        let (method, scheme, omega, n, spp) = match p.method {
+        let (method, scheme, max_solid_angle, n, spp) = match p.method {
             Method::PointBased {
                 scheme,
-                omega,
+                max_solid_angle,
                 microbuffer,
             } => (
                 "pbgi",
                 scheme.name(),
-                omega.to_string(),
+                max_solid_angle.to_string(),
                 microbuffer.to_string(),
                 String::new(),
             ),
@@ -317,7 +320,7 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
         };
         let _ = writeln!(
             s,
-            "{scene},{method},{scheme},{omega},{n},{spp},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            "{scene},{method},{scheme},{max_solid_angle},{n},{spp},{:.6},{:.6},{:.6},{:.6},{:.6}",
             p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
         );
     }
@@ -345,7 +348,7 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), String> {
         let method = match f[1] {
             "pbgi" => Method::PointBased {
                 scheme: f[2].parse().map_err(|_| bad("unknown scheme"))?,
-                omega: f[3].parse().map_err(|_| bad("bad Ω"))?,
+                max_solid_angle: f[3].parse().map_err(|_| bad("bad Ω"))?,
                 microbuffer: f[4].parse().map_err(|_| bad("bad microbuffer"))?,
             },
             "path-tracer" => Method::PathTracer {
@@ -394,12 +397,12 @@ pub fn to_markdown(
         match p.method {
             Method::PointBased {
                 scheme,
-                omega,
+                max_solid_angle,
                 microbuffer,
             } => {
                 let _ = writeln!(
                     s,
-                    "| pbgi | {scheme} | {omega} | {microbuffer} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
+                    "| pbgi | {scheme} | {max_solid_angle} | {microbuffer} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
                     default.spp, p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
                 );
             }
@@ -413,14 +416,14 @@ pub fn to_markdown(
         }
     }
     let at_default = points.iter().find(|p| {
-        matches!(p.method, Method::PointBased { omega, microbuffer, .. }
-            if omega == default.max_solid_angle && microbuffer == default.microbuffer)
+        matches!(p.method, Method::PointBased { max_solid_angle, microbuffer, .. }
+            if max_solid_angle == default.cut.max_solid_angle && microbuffer == default.microbuffer)
     });
     if let Some(p) = at_default {
         let _ = write!(
             s,
             "\nAt the default settings (Ω {}, microbuffer {}): relative RMSE {:.4} in {:.3} s",
-            default.max_solid_angle, default.microbuffer, p.rel_rmse, p.total_s
+            default.cut.max_solid_angle, default.microbuffer, p.rel_rmse, p.total_s
         );
         match path_tracer_time_for(points, p.rel_rmse) {
             Some(t) => {

@@ -38,9 +38,9 @@ fn curves(points: &[ErrorPoint], microbuffer: usize) -> Vec<Curve> {
             .filter_map(|p| match p.method {
                 Method::PointBased {
                     scheme,
-                    omega,
+                    max_solid_angle,
                     microbuffer: n,
-                } if keep(scheme, omega, n) => Some((p.total_s, p.rel_rmse)),
+                } if keep(scheme, max_solid_angle, n) => Some((p.total_s, p.rel_rmse)),
                 _ => None,
             })
             .collect();
@@ -48,12 +48,12 @@ fn curves(points: &[ErrorPoint], microbuffer: usize) -> Vec<Curve> {
         v
     };
     for (scheme, n) in keys {
-        let v = point_based(&|s, omega, m| s == scheme && m == n && omega > 0.0);
+        let v = point_based(&|s, max_solid_angle, m| s == scheme && m == n && max_solid_angle > 0.0);
         if !v.is_empty() {
             out.push((format!("pbgi {scheme} (Ω sweep, N {n})"), v));
         }
     }
-    let zero = point_based(&|_, omega, _| omega == 0.0);
+    let zero = point_based(&|_, max_solid_angle, _| max_solid_angle == 0.0);
     if !zero.is_empty() {
         out.push(("pbgi Ω = 0 (every leaf splatted)".to_string(), zero));
     }

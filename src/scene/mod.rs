@@ -19,6 +19,7 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 
+use crate::brdf::GlossyLobe;
 use crate::points::MAX_RADIANCE;
 
 /// Largest image width and height: a frame's pixel count then fits in `u32`.
@@ -70,6 +71,14 @@ impl Material {
             bump: None,
             two_sided: false,
         }
+    }
+
+    /// The glossy lobe the shading evaluates, if the material has one.
+    pub fn lobe(&self) -> Option<GlossyLobe> {
+        self.glossy.map(|g| GlossyLobe {
+            specular: g.specular,
+            roughness: g.roughness,
+        })
     }
 }
 

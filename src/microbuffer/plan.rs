@@ -1,4 +1,4 @@
-//! Drawing one splat. A located splat ([`Located`](super::lanes::Located))
+//! Planning one splat: a located splat ([`Located`](super::locate::Located))
 //! is drawn one of three ways:
 //!
 //! * smaller than the pixel its centre falls in (`Ω < ΔΩ`): spread over the
@@ -19,15 +19,9 @@
 //! time ([`Tiles`]); only the read-modify-write of pixels is per receiver
 //! and pixel.
 
-use std::simd::prelude::*;
-use std::simd::simd_swizzle;
-
-use glam::Vec3;
-
-use super::lanes::{FrameLanes, Located, NodeSplat};
-use super::{COVER_CAP, COVER_ONE, MicroBuffer, NEAR, NO_KEY, Table, key};
-use crate::cut::node_test::{F32s, LANES, M32s, Real};
-use crate::tree::{NodeId, SplatRecord};
+use super::locate::{FrameLanes, NodeSplat};
+use super::table::{NEAR, Table};
+use crate::simd::{F32s, M32s, Real};
 
 /// Leaf disks are rasterized this much larger than their radius, so that
 /// the disks of a surface overlap instead of leaving holes between them.
@@ -76,7 +70,7 @@ pub(crate) struct PixelBox<V> {
 impl PixelBox<f32> {
     /// The same box in every lane.
     #[inline(always)]
-    fn splat(&self) -> PixelBox<F32s> {
+    pub(super) fn splat(&self) -> PixelBox<F32s> {
         let s = F32s::splat;
         PixelBox {
             c0: s(self.c0),
@@ -88,7 +82,7 @@ impl PixelBox<f32> {
 
     /// Pixel indices `(c0, c1, r0, r1)`.
     #[inline(always)]
-    fn bounds(&self) -> (usize, usize, usize, usize) {
+    pub(super) fn bounds(&self) -> (usize, usize, usize, usize) {
         (
             self.c0 as usize,
             self.c1 as usize,
@@ -267,7 +261,7 @@ impl<V: Real> ConePlan<V> {
     /// Whether the cone around `w` covers the pixels of centre directions
     /// `u` (one pixel, or sixteen in the lanes), and by how much.
     #[inline(always)]
-    fn cover(&self, w: [V; 3], ux: V, uy: V, uz: V) -> (V::Mask, V) {
+    pub(super) fn cover(&self, w: [V; 3], ux: V, uy: V, uz: V) -> (V::Mask, V) {
         let (ex, ey, ez) = (ux - w[0], uy - w[1], uz - w[2]);
         let c2 = ex * ex + ey * ey + ez * ez;
         let ramp = (V::splat(0.5) + (self.a - c2.sqrt()) * self.inv_s).min_of(V::splat(1.0));
@@ -283,7 +277,7 @@ impl<V: Real> DiskPlan<V> {
     /// `delta`) wide at the hit distance, so a disk over a few pixels still
     /// shows its true area on average.
     #[inline(always)]
-    fn hit(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
+    pub(super) fn hit(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
         let [mx, my, mz] = self.m;
         let denom = mx * ux + my * uy + mz * uz;
         let t = self.mc / denom;
@@ -300,7 +294,7 @@ impl<V: Real> DiskPlan<V> {
 impl DiskPlan<f32> {
     /// The same disk in every lane.
     #[inline(always)]
-    fn splat(&self) -> DiskPlan<F32s> {
+    pub(super) fn splat(&self) -> DiskPlan<F32s> {
         let s = F32s::splat;
         DiskPlan {
             fronts: M32s::splat(self.fronts),
@@ -316,7 +310,7 @@ impl DiskPlan<f32> {
 impl ConePlan<f32> {
     /// The same cone in every lane.
     #[inline(always)]
-    fn splat(&self) -> ConePlan<F32s> {
+    pub(super) fn splat(&self) -> ConePlan<F32s> {
         let s = F32s::splat;
         ConePlan {
             a: s(self.a),
@@ -324,317 +318,6 @@ impl ConePlan<f32> {
             inner2: s(self.inner2),
             outer2: s(self.outer2),
             bx: self.bx.splat(),
-        }
-    }
-}
-
-/// A pixel box is swept 16 pixels at a time in tiles of `w` columns by
-/// `16 / w` rows (`w` = 4, 8 or 16, the narrowest that spans the box), each
-/// row of a tile one contiguous load from a pixel table. Lane `k` is column
-/// `k % w`, row `k / w` of the tile.
-#[derive(Clone, Copy)]
-struct Tile {
-    /// Pixel index of the tile's first lane.
-    base: usize,
-    /// Grid width (pixels from one row to the next).
-    n: usize,
-    /// Tile width, and its index in [`TILE_COL`] / [`TILE_ROW`].
-    w: usize,
-    shape: usize,
-    /// Rows of the tile inside the box.
-    rows: usize,
-    /// Lanes inside the box.
-    inside: M32s,
-}
-
-impl Tile {
-    /// The tile's 16 entries of the pixel table `a` (padded by [`LANES`] past
-    /// the last pixel, so that every row load stays inside); rows past
-    /// `rows` repeat the last (their lanes are outside the box).
-    #[inline(always)]
-    fn load(&self, a: &[f32]) -> F32s {
-        let row = |j: usize| self.base + j.min(self.rows - 1) * self.n;
-        match self.w {
-            4 => {
-                let q = |j: usize| Simd::<f32, 4>::from_slice(&a[row(j)..row(j) + 4]);
-                let lo: Simd<f32, 8> = simd_swizzle!(q(0), q(1), [0, 1, 2, 3, 4, 5, 6, 7]);
-                let hi: Simd<f32, 8> = simd_swizzle!(q(2), q(3), [0, 1, 2, 3, 4, 5, 6, 7]);
-                simd_swizzle!(lo, hi, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
-            }
-            8 => {
-                let h = |j: usize| Simd::<f32, 8>::from_slice(&a[row(j)..row(j) + 8]);
-                simd_swizzle!(h(0), h(1), [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
-            }
-            _ => F32s::from_slice(&a[self.base..self.base + LANES]),
-        }
-    }
-
-    /// The pixel of lane `k`.
-    #[inline(always)]
-    fn pixel(&self, k: usize) -> usize {
-        self.base + TILE_ROW[self.shape][k] as usize * self.n + TILE_COL[self.shape][k] as usize
-    }
-}
-
-/// Tile width for a box `cols` pixels wide.
-#[inline(always)]
-fn tile_width(cols: usize) -> usize {
-    if cols <= 4 {
-        4
-    } else if cols <= 8 {
-        8
-    } else {
-        16
-    }
-}
-
-/// Column and row of each lane in a tile of width 4, 8 and 16.
-const TILE_COL: [[i32; LANES]; 3] = [
-    [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3],
-    [0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7],
-    [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15],
-];
-const TILE_ROW: [[i32; LANES]; 3] = [
-    [0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3],
-    [0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1],
-    [0; LANES],
-];
-
-/// The tiles covering the pixel box `(c0, c1, r0, r1)` of an `n`-wide grid,
-/// row by row of tiles.
-struct Tiles {
-    n: usize,
-    c0: usize,
-    c1: usize,
-    r1: usize,
-    w: usize,
-    h: usize,
-    shape: usize,
-    r: usize,
-    c: usize,
-}
-
-impl Tiles {
-    #[inline(always)]
-    fn new(n: usize, (c0, c1, r0, r1): (usize, usize, usize, usize)) -> Self {
-        let w = tile_width(c1 + 1 - c0);
-        Tiles {
-            n,
-            c0,
-            c1,
-            r1,
-            w,
-            h: LANES / w,
-            shape: w.trailing_zeros() as usize - 2,
-            r: r0,
-            c: c0,
-        }
-    }
-}
-
-impl Iterator for Tiles {
-    type Item = Tile;
-    #[inline(always)]
-    fn next(&mut self) -> Option<Tile> {
-        if self.r > self.r1 {
-            return None;
-        }
-        let (r, c) = (self.r, self.c);
-        let cols = (self.c1 + 1 - c).min(self.w);
-        let rows = (self.r1 + 1 - r).min(self.h);
-        let inside = Simd::from_array(TILE_COL[self.shape]).simd_lt(Simd::splat(cols as i32))
-            & Simd::from_array(TILE_ROW[self.shape]).simd_lt(Simd::splat(rows as i32));
-        self.c += self.w;
-        if self.c > self.c1 {
-            self.c = self.c0;
-            self.r += self.h;
-        }
-        Some(Tile {
-            base: r * self.n + c,
-            n: self.n,
-            w: self.w,
-            shape: self.shape,
-            rows,
-            inside,
-        })
-    }
-}
-
-/// [`MicroBuffer::write`] on the buffer's arrays (borrowed apart from its
-/// pixel table).
-#[inline(always)]
-fn write_pixel(
-    own: &mut [u64],
-    any: &mut [u64],
-    cover: &mut [u32],
-    p: usize,
-    key: u64,
-    coverage: f32,
-    owns: bool,
-) {
-    debug_assert!(coverage >= 0.0, "coverage {coverage}");
-    let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
-    cover[p] = (cover[p] + c).min(COVER_CAP);
-    any[p] = any[p].min(key);
-    if owns {
-        own[p] = own[p].min(key);
-    }
-}
-
-impl MicroBuffer {
-    /// Adds a splat of `key` covering the fraction `coverage` ∈ [0, 1] of pixel `p`.
-    #[inline(always)]
-    fn write(&mut self, p: usize, key: u64, coverage: f32, owns: bool) {
-        write_pixel(
-            &mut self.own,
-            &mut self.any,
-            &mut self.cover,
-            p,
-            key,
-            coverage,
-            owns,
-        );
-    }
-
-    /// [`write`](Self::write) where `m`, else nothing, without a branch:
-    /// whether a corner gets weight is data the branch predictor cannot learn.
-    #[inline(always)]
-    fn write_if(&mut self, m: bool, p: usize, key: u64, coverage: f32, owns: bool) {
-        let c = (f32::select(m, coverage, 0.0).min_of(1.0) * COVER_ONE) as u32;
-        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
-        let key = if m { key } else { NO_KEY };
-        self.any[p] = self.any[p].min(key);
-        let own_key = if owns { key } else { NO_KEY };
-        self.own[p] = self.own[p].min(own_key);
-    }
-
-    /// Draws a small splat; it owns the pixel its centre falls in.
-    #[inline(always)]
-    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64, pixel: f32) {
-        for k in 0..4 {
-            let p = plan.p[k];
-            self.write_if(plan.w[k] > 0.0, p as usize, key, plan.cover[k], p == pixel);
-        }
-    }
-
-    /// Draws a cone around local direction `w`; it owns the pixels it covers
-    /// by at least one half.
-    #[inline(always)]
-    pub(crate) fn draw_cone(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
-        let (c0, c1, r0, r1) = plan.bx.bounds();
-        let n = self.table.n;
-        for r in r0..=r1 {
-            for c in c0..=c1 {
-                let p = r * n + c;
-                let t = &self.table;
-                let (m, cover) = plan.cover([w.x, w.y, w.z], t.dir_x[p], t.dir_y[p], t.dir_z[p]);
-                if m {
-                    self.write(p, key, cover, 0.5 <= cover);
-                }
-            }
-        }
-    }
-
-    /// Draws a leaf's disk (depth: the hit distance); false if it covers no
-    /// pixel centre.
-    #[inline(always)]
-    pub(crate) fn draw_disk(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
-        if !plan.fronts {
-            return false;
-        }
-        let (c0, c1, r0, r1) = plan.bx.bounds();
-        let n = self.table.n;
-        let mut any_hit = false;
-        for row in r0..=r1 {
-            for col in c0..=c1 {
-                let p = row * n + col;
-                let t = &self.table;
-                let (hit, depth, cover) = plan.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
-                if hit {
-                    self.write(p, key(depth, node), cover, 0.5 <= cover);
-                    any_hit = true;
-                }
-            }
-        }
-        any_hit
-    }
-
-    /// [`draw_cone`](Self::draw_cone) 16 pixels at a time (the 16-lane
-    /// pipeline): the same coverage of each pixel, bit for bit.
-    #[inline(always)]
-    pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
-        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
-        let (lanes, wl) = (plan.splat(), [w.x, w.y, w.z].map(F32s::splat));
-        for tile in Tiles::new(t.n, plan.bx.bounds()) {
-            let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
-            let (m, cover) = lanes.cover(wl, ux, uy, uz);
-            let mut hits = (m & tile.inside).to_bitmask();
-            if hits == 0 {
-                continue;
-            }
-            let cover = cover.to_array();
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
-                let p = tile.pixel(k);
-                write_pixel(own, any, cov, p, key, cover[k], 0.5 <= cover[k]);
-            }
-        }
-    }
-
-    /// [`draw_disk`](Self::draw_disk) 16 pixels at a time (the 16-lane
-    /// pipeline): the same hits, depths and coverage, bit for bit.
-    #[inline(always)]
-    pub(crate) fn draw_disk_tiles(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
-        if !plan.fronts {
-            return false;
-        }
-        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
-        let lanes = plan.splat();
-        let mut any_hit = false;
-        for tile in Tiles::new(t.n, plan.bx.bounds()) {
-            let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
-            let (m, depth, cover) = lanes.hit(ux, uy, uz, tile.load(&t.pixel_size));
-            let mut hits = (m & tile.inside).to_bitmask();
-            if hits == 0 {
-                continue;
-            }
-            any_hit = true;
-            let (depth, cover) = (depth.to_array(), cover.to_array());
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
-                let p = tile.pixel(k);
-                write_pixel(own, any, cov, p, key(depth[k], node), cover[k], 0.5 <= cover[k]);
-            }
-        }
-        any_hit
-    }
-
-    /// Draws node `node` (record `rec`) located at `l`: the scalar pipeline,
-    /// which works out only what the splat's class needs.
-    #[inline(always)]
-    pub(crate) fn apply(&mut self, rec: &SplatRecord, node: NodeId, l: &Located<f32>) {
-        let t = &*self.table;
-        let pixel = pixel_of(t, l.x, l.y);
-        let visible = 0.0 < l.wz;
-        let pixel_omega = f32::gather(&t.solid_angle, pixel);
-        let key = key(l.d, node);
-        if visible && l.omega < pixel_omega {
-            let plan = plan_small(t, l.x, l.y, l.omega);
-            self.draw_small(&plan, key, pixel);
-        } else if rec.leaf != 0 {
-            let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
-            // `Ω` is a far-field estimate that blows up for a disk nearly in
-            // the receiver's plane: a leaf missing every centre gets a pixel at most.
-            if !self.draw_disk(&plan, node) && visible {
-                let t = &*self.table;
-                let plan = plan_small(t, l.x, l.y, pixel_omega);
-                self.draw_small(&plan, key, pixel);
-            }
-        } else {
-            let plan = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
-            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key);
         }
     }
 }

@@ -4,12 +4,12 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::light::Lights;
+use super::trace::Tracer;
 use crate::error::Error;
-use crate::light::Lights;
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
+use crate::rng::Rng;
 use crate::scene::Scene;
-use crate::synthetic::Rng;
-use crate::trace::Tracer;
 
 /// How a scene is turned into surfels.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,14 +1,9 @@
-//! Run-time dispatch: the kernels are written once (generic, `#[inline(always)]`)
-//! and compiled here into one clone per instruction set with
-//! `multiversion::target`. The caller may force a clone (API or `PBGI_ISA`);
-//! asking for one the CPU lacks is an error, never an illegal instruction.
+//! The instruction-set paths of the kernels, their detection on this CPU and
+//! the `PBGI_ISA` override. A platform concept: it knows nothing of the
+//! kernels it selects between.
 
 use std::fmt;
 use std::str::FromStr;
-
-use super::node_test::LANES;
-use super::{CutSink, Receiver, Scheme, Traversal, TraversalStats, packet, scalar, single};
-use crate::error::Error;
 
 /// An instruction-set path of the kernels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -94,12 +89,12 @@ impl Isa {
             .unwrap_or(Isa::Portable)
     }
 
-    /// `self` if available, else [`Error::IsaUnavailable`].
-    pub fn require(self) -> Result<Isa, Error> {
+    /// `self` if available, else [`IsaError::Unavailable`].
+    pub fn require(self) -> Result<Isa, IsaError> {
         if self.is_available() {
             Ok(self)
         } else {
-            Err(Error::IsaUnavailable {
+            Err(IsaError::Unavailable {
                 requested: self,
                 available: Isa::available(),
             })
@@ -108,7 +103,7 @@ impl Isa {
 
     /// The path named by `PBGI_ISA`: `None` when unset, empty or `auto`; an
     /// error when unknown or not runnable here.
-    pub fn from_env() -> Result<Option<Isa>, Error> {
+    pub fn from_env() -> Result<Option<Isa>, IsaError> {
         match std::env::var("PBGI_ISA") {
             Ok(v) if v.trim().is_empty() || v.trim().eq_ignore_ascii_case("auto") => Ok(None),
             Ok(v) => Ok(Some(v.parse::<Isa>()?.require()?)),
@@ -124,8 +119,8 @@ impl fmt::Display for Isa {
 }
 
 impl FromStr for Isa {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self, Error> {
+    type Err = IsaError;
+    fn from_str(s: &str) -> Result<Self, IsaError> {
         let t = s.trim().to_ascii_lowercase();
         let t = match t.as_str() {
             "avx-512" | "avx512f" => "avx512",
@@ -135,111 +130,47 @@ impl FromStr for Isa {
         Isa::ALL
             .into_iter()
             .find(|i| i.name() == t)
-            .ok_or_else(|| Error::UnknownIsa { value: s.to_string() })
+            .ok_or_else(|| IsaError::Unknown { value: s.to_string() })
     }
 }
 
-/// Runs `scheme` over all receivers on the traversal's path.
-pub(crate) fn run<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    match t.isa() {
-        // SAFETY (each arm): a Traversal only holds an Isa whose features
-        // `Isa::is_available` detected on this CPU.
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { run_avx512(t, scheme, receivers, sink) },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { run_avx2(t, scheme, receivers, sink) },
-        #[cfg(target_arch = "aarch64")]
-        Isa::Neon => unsafe { run_neon(t, scheme, receivers, sink) },
-        _ => run_portable(t, scheme, receivers, sink),
-    }
+/// Errors of choosing an instruction-set path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum IsaError {
+    /// The requested path cannot run on this CPU (or was not compiled for
+    /// this architecture).
+    Unavailable {
+        /// The path asked for.
+        requested: Isa,
+        /// The paths this CPU can run, best first.
+        available: Vec<Isa>,
+    },
+    /// `PBGI_ISA` or a parsed name is not a known path.
+    Unknown {
+        /// The text given.
+        value: String,
+    },
 }
 
-#[multiversion::target("x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl")]
-fn run_avx512<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    run_all(t, scheme, receivers, sink)
-}
-
-#[multiversion::target("x86_64+avx2+fma")]
-fn run_avx2<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    run_all(t, scheme, receivers, sink)
-}
-
-#[multiversion::target("aarch64+neon")]
-fn run_neon<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    run_all(t, scheme, receivers, sink)
-}
-
-// Kept out of line like the other clones, so each one can be found in the
-// machine code (scripts/check-asm.sh).
-#[inline(never)]
-fn run_portable<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    run_all(t, scheme, receivers, sink)
-}
-
-/// The body every clone inlines.
-#[inline(always)]
-fn run_all<S: CutSink>(
-    t: &Traversal,
-    scheme: Scheme,
-    receivers: &[Receiver],
-    sink: &mut S,
-) -> TraversalStats {
-    let mut stats = TraversalStats {
-        receivers: receivers.len() as u64,
-        ..Default::default()
-    };
-    if t.tree.is_empty() {
-        return stats;
-    }
-    let mut scratch = single::PairStack::default();
-    match scheme {
-        Scheme::Scalar => {
-            for (i, r) in receivers.iter().enumerate() {
-                stats.node_tests += scalar::traverse(t, &r.lanes(), i, sink);
+impl fmt::Display for IsaError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            IsaError::Unavailable { requested, available } => {
+                let names: Vec<_> = available.iter().map(|i| i.name()).collect();
+                write!(
+                    f,
+                    "instruction set {} is not available on this CPU (available: {})",
+                    requested.name(),
+                    names.join(", ")
+                )
             }
-        }
-        Scheme::Single => {
-            for (i, r) in receivers.iter().enumerate() {
-                scratch.clear();
-                scratch.push_node(0);
-                single::traverse(t, &r.lanes(), i, &mut scratch, sink, &mut stats);
-            }
-        }
-        Scheme::Packet => {
-            for (c, chunk) in receivers.chunks(LANES).enumerate() {
-                packet::traverse::<S, false>(t, chunk, c * LANES, &mut scratch, sink, &mut stats);
-            }
-        }
-        Scheme::Hybrid => {
-            for (c, chunk) in receivers.chunks(LANES).enumerate() {
-                packet::traverse::<S, true>(t, chunk, c * LANES, &mut scratch, sink, &mut stats);
-            }
+            IsaError::Unknown { value } => write!(
+                f,
+                "unknown instruction set {value:?} (expected auto, avx512, avx2, neon or portable)"
+            ),
         }
     }
-    stats
 }
+
+impl std::error::Error for IsaError {}

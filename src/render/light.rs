@@ -4,8 +4,8 @@
 use glam::Vec3;
 
 use crate::scene::{Light, Scene};
-use crate::synthetic::Rng;
-use crate::trace::Tracer;
+use super::trace::Tracer;
+use crate::rng::Rng;
 
 /// The scene's emitters, ready to sample.
 pub struct Lights {

@@ -1,330 +1,30 @@
-//! Rendering a scene with point-based global illumination: camera rays give
-//! the receivers (4×4 pixel tiles make the packets), the kernels give their
-//! cuts, the microbuffer splats and convolves them, direct light comes from
-//! shadow rays. Stages a scene does not need are left out, and said so.
+//! A frame: the scene made ready (ray queries, lights, surfels, tree: the
+//! paper's `pre.`), then per 4×4-pixel tile and camera sample the packet of
+//! receivers, its direct light, its cuts, splatting and convolution.
 
-use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::brdf::GlossyLobe;
-use crate::cut::{CutOptions, CutSink, Isa, LANES, Receiver, Scheme, Traversal, TraversalStats, auto_scheme};
+use super::bake::{BakeOptions, bake};
+use super::bounces::gather_bounce;
+use super::light::Lights;
+use super::options::RenderOptions;
+use super::output::{RenderError, RenderOutput, Stage, Timings};
+use super::image::Image;
+use super::packets::PacketCuts;
+use super::shading::{ShadingPoint, shading_point};
+use super::trace::Tracer;
+use crate::cut::{Receiver, Scheme, Traversal, TraversalStats};
 use crate::error::Error;
-use crate::light::Lights;
-use crate::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
-use crate::points::bake::{BakeOptions, bake};
-use crate::points::{PointCloud, Surfel};
-use crate::scene::{Bump, Material, Scene, SceneError};
-use crate::synthetic::Rng;
-use crate::trace::{Hit, Tracer};
-use crate::tree::{NodeId, Tree};
-
-/// Which scheme the renderer runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SchemeChoice {
-    /// Per packet, [`auto_scheme`]: packet, single for sparse packets.
-    Auto,
-    /// A named scheme.
-    Fixed(Scheme),
-}
-
-/// Render settings; the defaults render the Cornell box in about a second.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// Traversal scheme.
-    pub scheme: SchemeChoice,
-    /// Ω of the node test.
-    pub max_solid_angle: f32,
-    /// Hybrid switch threshold (active lanes).
-    pub hybrid_threshold: u32,
-    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
-    pub microbuffer: usize,
-    /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
-    pub bounces: u32,
-    /// Camera samples per pixel (each a receiver).
-    pub spp: u32,
-    /// Light samples per receiver for direct light (`None`: `spp`, at most 16).
-    pub direct_samples: Option<u32>,
-    /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
-    pub ao: bool,
-    /// Surfels per unit area.
-    pub density: f32,
-    /// Area-light samples per surfel.
-    pub surfel_light_samples: u32,
-    /// Instruction-set path (`None`: `PBGI_ISA`, else the best).
-    pub isa: Option<Isa>,
-    /// Seed of every random choice.
-    pub seed: u64,
-}
-
-impl fmt::Display for SchemeChoice {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            SchemeChoice::Auto => f.write_str("auto"),
-            SchemeChoice::Fixed(s) => s.fmt(f),
-        }
-    }
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        Self {
-            scheme: SchemeChoice::Auto,
-            max_solid_angle: 0.05,
-            hybrid_threshold: 2,
-            microbuffer: 12,
-            bounces: 1,
-            spp: 4,
-            direct_samples: None,
-            ao: false,
-            density: 2000.0,
-            surfel_light_samples: 16,
-            isa: None,
-            seed: 1,
-        }
-    }
-}
-
-/// A linear RGB image, row-major from the top-left corner.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Linear radiance per pixel.
-    pub pixels: Vec<Vec3>,
-}
-
-impl Image {
-    /// 8-bit sRGB, clamped (no other tone mapping).
-    pub fn to_srgb8(&self) -> Vec<u8> {
-        let encode = |x: f32| {
-            let x = x.clamp(0.0, 1.0);
-            let s = if x <= 0.003_130_8 {
-                12.92 * x
-            } else {
-                1.055 * x.powf(1.0 / 2.4) - 0.055
-            };
-            (s * 255.0 + 0.5) as u8
-        };
-        self.pixels
-            .iter()
-            .flat_map(|p| [encode(p.x), encode(p.y), encode(p.z)])
-            .collect()
-    }
-}
-
-/// Seconds per stage, summed over threads (the paper's Table 1 columns).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Timings {
-    /// Point cloud (surfels + their direct light + extra bounces) and tree.
-    pub pre: f64,
-    /// Cut traversal.
-    pub trav: f64,
-    /// Splatting and convolution.
-    pub others: f64,
-    /// Camera rays and direct light at the receivers.
-    pub direct: f64,
-    /// Wall-clock seconds of the whole render.
-    pub total_wall: f64,
-}
-
-/// One pipeline stage and whether it ran.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Stage {
-    /// What it is.
-    pub name: &'static str,
-    /// `None` if it ran, else why it was left out.
-    pub skipped: Option<String>,
-}
-
-/// What a render produced.
-#[derive(Clone, Debug)]
-pub struct RenderOutput {
-    /// The image.
-    pub image: Image,
-    /// Stage times.
-    pub timings: Timings,
-    /// Traversal counters over all receivers.
-    pub stats: TraversalStats,
-    /// The scheme that ran (on full packets, under `auto`).
-    pub scheme: Scheme,
-    /// The choice it came from.
-    pub choice: SchemeChoice,
-    /// The instruction-set path that ran.
-    pub isa: Isa,
-    /// Surfels in the cloud (0 when none was needed).
-    pub surfels: usize,
-    /// Receivers shaded.
-    pub receivers: usize,
-    /// Every stage, run or left out.
-    pub stages: Vec<Stage>,
-}
-
-/// Errors of a render.
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum RenderError {
-    /// The scene is unusable.
-    Scene(SceneError),
-    /// A kernel-layer error (options, ISA, invalid surfels).
-    Kernel(Error),
-    /// A self-check failed (a scheme's cuts differ from the reference's, or
-    /// an image does not match its reference's size).
-    Check(String),
-}
-
-impl std::fmt::Display for RenderError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RenderError::Scene(e) => e.fmt(f),
-            RenderError::Kernel(e) => e.fmt(f),
-            RenderError::Check(m) => f.write_str(m),
-        }
-    }
-}
-
-impl std::error::Error for RenderError {}
-
-impl From<Error> for RenderError {
-    fn from(e: Error) -> Self {
-        RenderError::Kernel(e)
-    }
-}
-
-impl From<SceneError> for RenderError {
-    fn from(e: SceneError) -> Self {
-        RenderError::Scene(e)
-    }
-}
-
-/// Splat lists of one packet, filled by the traversal and splatted afterwards
-/// so traversal and splatting are timed apart.
-pub(crate) struct SplatLists(pub Vec<Vec<NodeId>>);
-
-impl SplatLists {
-    pub fn new() -> Self {
-        SplatLists(vec![Vec::new(); LANES])
-    }
-
-    pub fn clear(&mut self) {
-        for l in &mut self.0 {
-            l.clear();
-        }
-    }
-}
-
-impl CutSink for SplatLists {
-    #[inline]
-    fn splat(&mut self, receiver: usize, node: NodeId) {
-        self.0[receiver].push(node);
-    }
-}
-
-/// A packet's cuts as the shading pipeline of the scheme wants them: per
-/// receiver lists for the scalar reference (shaded one node at a time), each
-/// node with its lanes for the vector schemes (shaded 16 lanes at a time).
-pub(crate) enum PacketCuts {
-    Lists(SplatLists),
-    Lanes(PacketCut),
-}
-
-impl PacketCuts {
-    /// The form `scheme`'s pipeline uses.
-    pub fn for_scheme(scheme: Scheme, tree: &Tree) -> Self {
-        match scheme {
-            Scheme::Scalar => PacketCuts::Lists(SplatLists::new()),
-            _ => PacketCuts::Lanes(PacketCut::new(tree)),
-        }
-    }
-
-    /// Cuts `receivers` (one packet) into `self`, which is cleared first.
-    pub fn run(&mut self, traversal: &Traversal, scheme: Scheme, receivers: &[Receiver]) -> TraversalStats {
-        match self {
-            PacketCuts::Lists(l) => {
-                l.clear();
-                traversal.run(scheme, receivers, l)
-            }
-            PacketCuts::Lanes(c) => {
-                c.clear();
-                traversal.run(scheme, receivers, c)
-            }
-        }
-    }
-}
-
-/// Tilts `n` by the procedural bump at `p`.
-fn bumped(n: Vec3, p: Vec3, bump: &Bump) -> Vec3 {
-    let (t, b) = n.any_orthonormal_pair();
-    let w = std::f32::consts::TAU * bump.frequency;
-    let tilt = t * (w * p.dot(t)).sin() + b * (w * p.dot(b) + 1.3).sin();
-    (n + tilt * bump.amplitude).normalize()
-}
-
-/// A shading point: where a camera ray hit, how to shade it.
-pub(crate) struct ShadingPoint {
-    /// Hit point, moved off the surface by the tracer's epsilon.
-    pub position: Vec3,
-    /// Shading normal on the viewer's side.
-    pub normal: Vec3,
-    /// Unit direction back to the viewer.
-    pub wo: Vec3,
-    /// Material index.
-    pub material: usize,
-    /// Emitted radiance towards the viewer.
-    pub emitted: Vec3,
-}
-
-pub(crate) fn shading_point(
-    scene: &Scene,
-    tracer: &Tracer,
-    origin: Vec3,
-    dir: Vec3,
-    hit: &Hit,
-) -> Option<ShadingPoint> {
-    let mesh = &scene.meshes[hit.mesh as usize];
-    let material: &Material = &scene.materials[mesh.material];
-    let mut ng = hit.geometric_normal;
-    let front = ng.dot(dir) < 0.0;
-    if !front {
-        if !material.two_sided {
-            return None; // a one-sided surface seen from behind is black
-        }
-        ng = -ng;
-    }
-    let position = origin + dir * hit.t;
-    let mut normal = match &mesh.normals {
-        Some(normals) => {
-            let t = mesh.triangles[hit.triangle as usize];
-            let (u, v) = (hit.uv.x, hit.uv.y);
-            let ns = normals[t[0] as usize] * (1.0 - u - v)
-                + normals[t[1] as usize] * u
-                + normals[t[2] as usize] * v;
-            let ns = ns.normalize_or(ng);
-            if ns.dot(ng) > 0.0 { ns } else { ng }
-        }
-        None => ng,
-    };
-    if let Some(b) = &material.bump {
-        normal = bumped(normal, position, b);
-    }
-    let emitted = if front {
-        mesh.emission.unwrap_or(Vec3::ZERO)
-    } else {
-        Vec3::ZERO
-    };
-    Some(ShadingPoint {
-        position: position + ng * tracer.epsilon(),
-        normal,
-        wo: -dir,
-        material: mesh.material,
-        emitted,
-    })
-}
+use crate::microbuffer::{Convolution, MicroBuffer};
+use crate::points::PointCloud;
+use crate::rng::Rng;
+use crate::scene::Scene;
+use crate::simd::{Isa, LANES};
+use crate::tree::Tree;
 
 /// One tile's pixels (index, radiance), traversal counters and receiver count.
 type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
@@ -382,10 +82,7 @@ impl<'s> Frame<'s> {
         MicroBuffer::new(opts.microbuffer)?;
         let mut stages = Vec::new();
         let needs_points = opts.ao || opts.bounces > 0;
-        let scheme = match opts.scheme {
-            SchemeChoice::Fixed(s) => s,
-            SchemeChoice::Auto => auto_scheme(LANES),
-        };
+        let scheme = opts.scheme.resolve(LANES);
 
         let t_pre = Instant::now();
         let tracer = Tracer::new(scene);
@@ -471,22 +168,12 @@ impl<'s> Frame<'s> {
 
     /// The scheme for a packet of `receivers` receivers.
     pub(crate) fn scheme_for(&self, receivers: usize) -> Scheme {
-        match self.opts.scheme {
-            SchemeChoice::Auto => auto_scheme(receivers),
-            SchemeChoice::Fixed(s) => s,
-        }
+        self.opts.scheme.resolve(receivers)
     }
 
     /// The traversal with this frame's options and `scheme`'s needs.
     pub(crate) fn traversal(&self) -> Result<Traversal<'_>, Error> {
-        Traversal::new(
-            &self.tree,
-            CutOptions {
-                max_solid_angle: self.opts.max_solid_angle,
-                hybrid_threshold: self.opts.hybrid_threshold,
-                isa: self.opts.isa,
-            },
-        )
+        Traversal::new(&self.tree, self.opts.cut)
     }
 
     /// Number of 4×4-pixel tiles.
@@ -540,10 +227,7 @@ impl<'s> Frame<'s> {
             .map(|pp| {
                 let sp = &pp.point;
                 let m = &self.scene.materials[sp.material];
-                let lobe = m.glossy.map(|g| GlossyLobe {
-                    specular: g.specular,
-                    roughness: g.roughness,
-                });
+                let lobe = m.lobe();
                 let fd = m.albedo * std::f32::consts::FRAC_1_PI;
                 let (n, wo) = (sp.normal, sp.wo);
                 let f = |wi: Vec3| match &lobe {
@@ -587,11 +271,7 @@ impl<'s> Frame<'s> {
         } else {
             Convolution::Irradiance
         };
-        let mut out = vec![Vec3::ZERO; points.len()];
-        match cuts {
-            PacketCuts::Lists(l) => shade_cuts(isa, bufs, tree, &l.0, what, &mut out),
-            PacketCuts::Lanes(c) => shade_packet(isa, bufs, tree, c, what, &mut out),
-        }
+        let out = cuts.shade(isa, tree, bufs, what);
         points
             .iter()
             .zip(bufs.iter())
@@ -603,11 +283,7 @@ impl<'s> Frame<'s> {
                     Vec3::splat(1.0 - e.x)
                 } else {
                     let mut l = m.albedo * std::f32::consts::FRAC_1_PI * e;
-                    if let Some(g) = m.glossy {
-                        let lobe = GlossyLobe {
-                            specular: g.specular,
-                            roughness: g.roughness,
-                        };
+                    if let Some(lobe) = m.lobe() {
                         l += mb.glossy(tree, sp.wo, &lobe);
                     }
                     l
@@ -716,68 +392,4 @@ pub fn render(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderOutput, RenderError> {
     Frame::prepare(scene, opts)?.render(progress)
-}
-
-/// One more bounce at the surfels: each surfel's radiance becomes its direct
-/// part plus `albedo/π · E`, with `E` gathered from the current cloud.
-fn gather_bounce(
-    cloud: &PointCloud,
-    direct: &[Vec3],
-    albedo: &[Vec3],
-    tree: &Tree,
-    scheme: Scheme,
-    opts: &RenderOptions,
-) -> Result<PointCloud, Error> {
-    let traversal = Traversal::new(
-        tree,
-        CutOptions {
-            max_solid_angle: opts.max_solid_angle,
-            hybrid_threshold: opts.hybrid_threshold,
-            isa: opts.isa,
-        },
-    )?;
-    let surfels = cloud.surfels();
-    // The receivers sit a hair above their surfel so it does not see itself edge-on.
-    let receivers: Vec<Receiver> = surfels
-        .iter()
-        .map(|s| Receiver::new(s.position + s.normal * (s.radius * 1e-3), s.normal))
-        .collect::<Result<_, _>>()?;
-    let proto = MicroBuffer::new(opts.microbuffer)?;
-    // The surfels' packets (tree order: neighbours) through the scheme's
-    // shading pipeline, as in `Frame::shade`.
-    let isa = traversal.isa();
-    let gathered: Vec<Vec3> = receivers
-        .par_chunks(LANES)
-        .map_init(
-            || (PacketCuts::for_scheme(scheme, tree), vec![proto.clone(); LANES]),
-            |(cuts, buffers), chunk| {
-                cuts.run(&traversal, scheme, chunk);
-                let buffers = &mut buffers[..chunk.len()];
-                for (b, r) in buffers.iter_mut().zip(chunk) {
-                    b.reset(r.position(), r.normal());
-                }
-                let mut out = vec![Vec3::ZERO; chunk.len()];
-                match cuts {
-                    PacketCuts::Lists(l) => {
-                        shade_cuts(isa, buffers, tree, &l.0, Convolution::Irradiance, &mut out)
-                    }
-                    PacketCuts::Lanes(c) => {
-                        shade_packet(isa, buffers, tree, c, Convolution::Irradiance, &mut out)
-                    }
-                }
-                out
-            },
-        )
-        .flatten_iter()
-        .collect();
-    let next: Vec<Surfel> = surfels
-        .iter()
-        .zip(&gathered)
-        .zip(direct.iter().zip(albedo))
-        .map(|((s, e), (d, a))| Surfel {
-            radiance: (*d + *a * std::f32::consts::FRAC_1_PI * *e).max(Vec3::ZERO),
-            ..*s
-        })
-        .collect();
-    PointCloud::new(next)
 }

@@ -17,170 +17,14 @@ use std::simd::{Select, prelude::*};
 
 use glam::Vec3;
 
-use super::splat::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
-use super::{COVER_CAP, COVER_ONE, MicroBuffer, NO_KEY, Table};
-use crate::cut::node_test::{F32s, LANES, Real};
-use crate::cut::{CutSink, Isa};
-use crate::tree::{NodeId, SplatRecord, Tree};
-
-/// What splatting reads of a node, for one node or one per lane.
-#[derive(Clone, Copy)]
-pub(crate) struct NodeSplat<V> {
-    pub cx: V,
-    pub cy: V,
-    pub cz: V,
-    pub area: V,
-    pub nx: V,
-    pub ny: V,
-    pub nz: V,
-}
-
-impl NodeSplat<f32> {
-    #[inline(always)]
-    pub fn of(r: &SplatRecord) -> Self {
-        NodeSplat {
-            cx: r.center[0],
-            cy: r.center[1],
-            cz: r.center[2],
-            area: r.area,
-            nx: r.normal[0],
-            ny: r.normal[1],
-            nz: r.normal[2],
-        }
-    }
-
-    /// The same node in every lane.
-    #[inline(always)]
-    fn splat(&self) -> NodeSplat<F32s> {
-        NodeSplat {
-            cx: F32s::splat(self.cx),
-            cy: F32s::splat(self.cy),
-            cz: F32s::splat(self.cz),
-            area: F32s::splat(self.area),
-            nx: F32s::splat(self.nx),
-            ny: F32s::splat(self.ny),
-            nz: F32s::splat(self.nz),
-        }
-    }
-}
-
-/// A receiver's position and tangent frame (`t`, `b`, `n`), for one
-/// receiver or one per lane.
-#[derive(Clone, Copy)]
-pub(crate) struct FrameLanes<V> {
-    pub px: V,
-    pub py: V,
-    pub pz: V,
-    pub tx: V,
-    pub ty: V,
-    pub tz: V,
-    pub bx: V,
-    pub by: V,
-    pub bz: V,
-    pub nx: V,
-    pub ny: V,
-    pub nz: V,
-}
-
-impl FrameLanes<F32s> {
-    /// The frames of up to 16 buffers in the lanes; unused lanes repeat the first.
-    #[inline(always)]
-    fn of(bufs: &[MicroBuffer]) -> Self {
-        let mut f = [[0.0f32; LANES]; 12];
-        #[allow(clippy::needless_range_loop)] // `l` picks a buffer and a lane
-        for l in 0..LANES {
-            let b = bufs.get(l).unwrap_or(&bufs[0]).frame_lanes();
-            let v = [
-                b.px, b.py, b.pz, b.tx, b.ty, b.tz, b.bx, b.by, b.bz, b.nx, b.ny, b.nz,
-            ];
-            for (j, x) in v.into_iter().enumerate() {
-                f[j][l] = x;
-            }
-        }
-        let g = |j: usize| F32s::from_array(f[j]);
-        FrameLanes {
-            px: g(0),
-            py: g(1),
-            pz: g(2),
-            tx: g(3),
-            ty: g(4),
-            tz: g(5),
-            bx: g(6),
-            by: g(7),
-            bz: g(8),
-            nx: g(9),
-            ny: g(10),
-            nz: g(11),
-        }
-    }
-}
-
-/// A splat placed in a receiver's microbuffer: distance and direction
-/// (local) of its centre, projected solid angle, continuous pixel
-/// coordinates; `valid` is false where it cannot show.
-pub(crate) struct Located<V: Real> {
-    pub valid: V::Mask,
-    pub d: V,
-    pub omega: V,
-    pub wx: V,
-    pub wy: V,
-    pub wz: V,
-    pub x: V,
-    pub y: V,
-}
-
-/// Places node `s` in the microbuffer of receiver `f` (`half` = `N/2`).
-///
-/// `Ω = A·max(0, −n̄·ω)/d²`; the centre's local direction `w` goes through
-/// the octahedral map (a centre below the horizon to the horizon point
-/// above it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
-/// non-finite distance or `Ω`, a node facing away, a centre straight below.
-#[inline(always)]
-pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> Located<V> {
-    let vx = s.cx - f.px;
-    let vy = s.cy - f.py;
-    let vz = s.cz - f.pz;
-    let d2 = vx * vx + vy * vy + vz * vz;
-    let d = d2.sqrt();
-    let (dx, dy, dz) = (vx / d, vy / d, vz / d);
-    let zero = V::splat(0.0);
-    let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
-    let raw = s.area * facing.max_of(zero) / d2;
-    // A huge node right in front of the receiver overflows the far-field
-    // estimate; it covers at most the hemisphere.
-    let omega = raw.min_of(V::splat(std::f32::consts::TAU));
-    let wx = dx * f.tx + dy * f.ty + dz * f.tz;
-    let wy = dx * f.bx + dy * f.by + dz * f.bz;
-    let wz = dx * f.nx + dy * f.ny + dz * f.nz;
-    let sum = wx.abs() + wy.abs() + wz.max_of(zero);
-    let (px, py) = (wx / sum, wy / sum);
-    let one = V::splat(1.0);
-    let x = (px + py + one) * half;
-    let y = (px - py + one) * half;
-    let inf = V::splat(f32::INFINITY);
-    let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum);
-    Located {
-        valid,
-        d,
-        omega,
-        wx,
-        wy,
-        wz,
-        x,
-        y,
-    }
-}
-
-/// `a[0] + a[1] + … + a[15]`, in that order: how the 16 partial sums of a
-/// convolution are added up, in both pipelines.
-#[inline(always)]
-pub(crate) fn sum(a: [f32; LANES]) -> f32 {
-    let mut s = 0.0;
-    for x in a {
-        s += x;
-    }
-    s
-}
+use super::buffer::{COVER_CAP, COVER_ONE, MicroBuffer, NO_KEY, key};
+use super::locate::{FrameLanes, NodeSplat, locate};
+use super::plan::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
+use super::table::Table;
+use crate::cut::CutSink;
+use crate::simd::dispatch::{Kernel, dispatch};
+use crate::simd::{F32s, Isa, LANES, Real, lane_mask, set_bits, sum};
+use crate::tree::{NodeId, Tree};
 
 /// A packet's cut, each node once with the lanes (receivers `0..16` of the
 /// packet) whose cut holds it, gathered from any scheme's splats. Reusable:
@@ -275,17 +119,16 @@ pub fn shade_cuts(
         cuts.len() >= bufs.len() && out.len() >= bufs.len(),
         "a cut and an output per buffer"
     );
-    match isa {
-        // SAFETY (each arm): an `Isa` reaches here only from a `Traversal`,
-        // which holds one the CPU was detected to run.
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { cuts_avx512(bufs, tree, cuts, what, out) },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { cuts_avx2(bufs, tree, cuts, what, out) },
-        #[cfg(target_arch = "aarch64")]
-        Isa::Neon => unsafe { cuts_neon(bufs, tree, cuts, what, out) },
-        _ => cuts_portable(bufs, tree, cuts, what, out),
-    }
+    dispatch(
+        isa,
+        ShadeCuts {
+            bufs,
+            tree,
+            cuts,
+            what,
+            out,
+        },
+    );
 }
 
 /// Splats a packet's cut into its receivers' buffers `bufs` (at most 16,
@@ -309,58 +152,55 @@ pub fn shade_packet(
         // here: reference counting has no place in the clones).
         let table = bufs[0].table.clone();
         let t = &*table;
-        match isa {
-            // SAFETY: as in `shade_cuts`.
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => unsafe { packet_avx512(t, bufs, tree, cut, what, out) },
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { packet_avx2(t, bufs, tree, cut, what, out) },
-            #[cfg(target_arch = "aarch64")]
-            Isa::Neon => unsafe { packet_neon(t, bufs, tree, cut, what, out) },
-            _ => packet_portable(t, bufs, tree, cut, what, out),
-        }
+        dispatch(
+            isa,
+            ShadePacket {
+                t,
+                bufs,
+                tree,
+                cut,
+                what,
+                out,
+            },
+        );
     }
     cut.clear();
 }
 
-macro_rules! clones {
-    ($body:ident, ($($arg:ident: $ty:ty),*), $avx512:ident, $avx2:ident, $neon:ident, $portable:ident) => {
-        #[multiversion::target("x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl")]
-        fn $avx512($($arg: $ty),*) {
-            $body($($arg),*)
-        }
-        #[multiversion::target("x86_64+avx2+fma")]
-        fn $avx2($($arg: $ty),*) {
-            $body($($arg),*)
-        }
-        #[multiversion::target("aarch64+neon")]
-        fn $neon($($arg: $ty),*) {
-            $body($($arg),*)
-        }
-        #[inline(never)]
-        fn $portable($($arg: $ty),*) {
-            $body($($arg),*)
-        }
-    };
+/// The scalar pipeline's kernel: [`shade_cuts`] inside a clone.
+struct ShadeCuts<'a> {
+    bufs: &'a mut [MicroBuffer],
+    tree: &'a Tree,
+    cuts: &'a [Vec<NodeId>],
+    what: Convolution,
+    out: &'a mut [Vec3],
 }
 
-clones!(
-    cuts_body,
-    (bufs: &mut [MicroBuffer], tree: &Tree, cuts: &[Vec<NodeId>], what: Convolution, out: &mut [Vec3]),
-    cuts_avx512,
-    cuts_avx2,
-    cuts_neon,
-    cuts_portable
-);
+impl Kernel for ShadeCuts<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        cuts_body(self.bufs, self.tree, self.cuts, self.what, self.out)
+    }
+}
 
-clones!(
-    packet_body,
-    (t: &Table, bufs: &mut [MicroBuffer], tree: &Tree, cut: &mut PacketCut, what: Convolution, out: &mut [Vec3]),
-    packet_avx512,
-    packet_avx2,
-    packet_neon,
-    packet_portable
-);
+/// The 16-lane pipeline's kernel: [`shade_packet`] inside a clone.
+struct ShadePacket<'a> {
+    t: &'a Table,
+    bufs: &'a mut [MicroBuffer],
+    tree: &'a Tree,
+    cut: &'a mut PacketCut,
+    what: Convolution,
+    out: &'a mut [Vec3],
+}
+
+impl Kernel for ShadePacket<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        packet_body(self.t, self.bufs, self.tree, self.cut, self.what, self.out)
+    }
+}
 
 #[inline(always)]
 fn cuts_body(
@@ -412,7 +252,7 @@ fn packet_body(
     }
     let frames = FrameLanes::of(bufs);
     let half = F32s::splat(bufs[0].half_n());
-    let used = crate::cut::node_test::lane_mask(bufs.len());
+    let used = lane_mask(bufs.len());
     let zero = F32s::splat(0.0);
     for &node in &cut.nodes {
         let lanes = cut.lanes[node as usize] & used;
@@ -446,7 +286,7 @@ fn packet_body(
             None
         };
         if let Some(sp) = &small_plan {
-            for i in bits(small) {
+            for i in set_bits(small) {
                 bufs[i].draw_small_lane(sp, i);
             }
         }
@@ -459,7 +299,7 @@ fn packet_body(
             let c = [dp.c[0].to_array(), dp.c[1].to_array(), dp.c[2].to_array()];
             let (mc, r, bx) = (dp.mc.to_array(), dp.r.to_array(), boxes(&dp.bx));
             let fronts = dp.fronts.to_bitmask() as u16;
-            for i in bits(large) {
+            for i in set_bits(large) {
                 let plan = DiskPlan {
                     fronts: fronts >> i & 1 != 0,
                     m: [m[0][i], m[1][i], m[2][i]],
@@ -480,7 +320,7 @@ fn packet_body(
             let (a, inv_s) = (cp.a.to_array(), cp.inv_s.to_array());
             let (inner2, outer2, bx) = (cp.inner2.to_array(), cp.outer2.to_array(), boxes(&cp.bx));
             let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());
-            for i in bits(large) {
+            for i in set_bits(large) {
                 let plan = ConePlan {
                     a: a[i],
                     inv_s: inv_s[i],
@@ -488,34 +328,13 @@ fn packet_body(
                     outer2: outer2[i],
                     bx: bx.lane(i),
                 };
-                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, super::key(d[i], node));
+                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, key(d[i], node));
             }
         }
     }
     for (mb, o) in bufs.iter().zip(out.iter_mut()) {
         *o = convolve(mb, tree, what);
     }
-}
-
-/// The set bits of a lane mask, lowest first.
-struct Bits(u16);
-
-impl Iterator for Bits {
-    type Item = usize;
-    #[inline(always)]
-    fn next(&mut self) -> Option<usize> {
-        if self.0 == 0 {
-            return None;
-        }
-        let i = self.0.trailing_zeros() as usize;
-        self.0 &= self.0 - 1;
-        Some(i)
-    }
-}
-
-#[inline(always)]
-fn bits(m: u16) -> Bits {
-    Bits(m)
 }
 
 /// A small-splat plan of 16 lanes reduced to the pixel writes it makes:

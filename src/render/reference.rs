@@ -10,13 +10,15 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::image::Image;
+use super::light::Lights;
+use super::output::RenderError;
+use super::shading::shading_point;
+use super::trace::Tracer;
 use crate::brdf::GlossyLobe;
 use crate::error::Error;
-use crate::light::Lights;
-use crate::render::{Image, RenderError, shading_point};
+use crate::rng::Rng;
 use crate::scene::{Light, Material, Scene};
-use crate::synthetic::Rng;
-use crate::trace::Tracer;
 
 /// Path-tracer settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -221,10 +223,7 @@ fn trace_path(
         let m = &scene.materials[sp.material];
         let bsdf = Bsdf {
             material: m,
-            lobe: m.glossy.map(|g| GlossyLobe {
-                specular: g.specular,
-                roughness: g.roughness,
-            }),
+            lobe: m.lobe(),
         };
         let (p, n, wo) = (sp.position, sp.normal, sp.wo);
         // Next-event estimation: one area-light sample (MIS), every delta light.

@@ -1,0 +1,320 @@
+//! One receiver's raster: per pixel the nearest splats' keys and the summed
+//! coverage, and the convolutions that read it (the scalar pipeline's).
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::locate::{FrameLanes, Located, NodeSplat, locate};
+use super::table::Table;
+use crate::brdf::GlossyLobe;
+use crate::cut::CutSink;
+use crate::error::Error;
+use crate::simd::{F32s, LANES, Real, sum};
+use crate::tree::{NodeId, SplatRecord, Tree};
+
+/// One unit of coverage in the fixed-point sums.
+pub(crate) const COVER_ONE: f32 = (1u32 << 24) as f32;
+
+/// Coverage sums saturate here (≥ one unit, so the clamp to one is
+/// unaffected): `min(a + b, CAP)` is associative for non-negative values,
+/// and a sum below the cap plus one unit fits in 32 bits.
+pub(crate) const COVER_CAP: u32 = 1 << 25;
+
+/// No splat: larger than every key, and positive as an `i64` (keys compare
+/// as signed integers where the instruction set has no unsigned compare).
+pub(crate) const NO_KEY: u64 = i64::MAX as u64;
+
+/// `(depth, node)` as one integer ordered lexicographically: the bits of a
+/// non-negative, non-NaN `f32` order like its value.
+#[inline]
+pub(crate) fn key(depth: f32, node: NodeId) -> u64 {
+    debug_assert!(depth >= 0.0, "depth {depth}");
+    (u64::from(depth.to_bits()) << 32) | u64::from(node)
+}
+
+/// One receiver's raster.
+///
+/// ```
+/// use pbgi::microbuffer::MicroBuffer;
+/// use glam::Vec3;
+///
+/// let mut mb = MicroBuffer::new(12)?;
+/// mb.reset(Vec3::ZERO, Vec3::Y);
+/// assert_eq!(mb.occlusion(), 0.0); // nothing splatted yet
+/// # Ok::<(), pbgi::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct MicroBuffer {
+    pub(super) table: Arc<Table>,
+    pub(super) position: Vec3,
+    /// Tangent frame: local x, y, z (= normal) in world space.
+    pub(super) frame: [Vec3; 3],
+    /// Per pixel: the nearest `(depth, node)` among the splats that own it.
+    pub(super) own: Vec<u64>,
+    /// Per pixel: the nearest among all splats that touch it.
+    pub(super) any: Vec<u64>,
+    /// Per pixel: coverage in units of 2⁻²⁴, summed (saturating at [`COVER_CAP`]).
+    pub(super) cover: Vec<u32>,
+}
+
+impl MicroBuffer {
+    /// Largest supported resolution.
+    pub const MAX_RESOLUTION: usize = 256;
+
+    /// A microbuffer of resolution `n` (an n×n grid over the hemisphere),
+    /// 1 ≤ n ≤ 256. The pixel tables of a resolution are built once per
+    /// process and shared.
+    pub fn new(n: usize) -> Result<Self, Error> {
+        if !(1..=Self::MAX_RESOLUTION).contains(&n) {
+            return Err(Error::InvalidParameter {
+                name: "microbuffer resolution",
+                value: n.to_string(),
+                expected: "1 to 256",
+            });
+        }
+        let table = Table::shared(n);
+        let len = table.cos_weight.len();
+        Ok(Self {
+            table,
+            position: Vec3::ZERO,
+            frame: [Vec3::X, Vec3::Y, Vec3::Z],
+            own: vec![NO_KEY; len],
+            any: vec![NO_KEY; len],
+            cover: vec![0; len],
+        })
+    }
+
+    /// The resolution N.
+    pub fn resolution(&self) -> usize {
+        self.table.n
+    }
+
+    /// Number of pixels: `N²`.
+    pub fn pixels(&self) -> usize {
+        self.table.dir.len()
+    }
+
+    /// Clears the raster for a receiver at `position` facing `normal` (unit).
+    pub fn reset(&mut self, position: Vec3, normal: Vec3) {
+        // Duff et al., "Building an orthonormal basis, revisited".
+        let n = normal;
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        self.position = position;
+        self.frame = [t, bt, n];
+        self.own.fill(NO_KEY);
+        self.any.fill(NO_KEY);
+        self.cover.fill(0);
+    }
+
+    #[inline]
+    pub(super) fn to_world(&self, l: Vec3) -> Vec3 {
+        self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z
+    }
+
+    /// The receiver's position and frame, for the lane geometry.
+    #[inline(always)]
+    pub(super) fn frame_lanes(&self) -> FrameLanes<f32> {
+        let [t, b, n] = self.frame;
+        FrameLanes {
+            px: self.position.x,
+            py: self.position.y,
+            pz: self.position.z,
+            tx: t.x,
+            ty: t.y,
+            tz: t.z,
+            bx: b.x,
+            by: b.y,
+            bz: b.z,
+            nx: n.x,
+            ny: n.y,
+            nz: n.z,
+        }
+    }
+
+    /// `0.5·N`, the map's scale from `[−1, 1]` to pixels.
+    #[inline(always)]
+    pub(super) fn half_n(&self) -> f32 {
+        0.5 * self.table.n as f32
+    }
+
+    /// Where the node `rec` falls; `None` for a node that cannot show: at
+    /// the receiver's position, facing away, or straight below.
+    #[inline(always)]
+    pub(super) fn locate(&self, rec: &SplatRecord) -> Option<Located<f32>> {
+        let l = locate(&NodeSplat::of(rec), &self.frame_lanes(), self.half_n());
+        l.valid.then_some(l)
+    }
+
+    /// Rasterizes node `node` of `tree`, one node of this receiver's cut
+    /// (the scalar pipeline; [`shade_packet`] draws the same in 16 lanes).
+    ///
+    /// With `Ω = A·max(0, −n̄·ω)/d²` the node's projected solid angle (area
+    /// `A`, mean normal `n̄`, direction `ω` and distance `d` of its centre):
+    ///
+    /// * a node smaller than the pixel `ω` falls in (`Ω < ΔΩ`) is spread over
+    ///   the 2×2 pixels around `ω` with bilinear weights, each covered by its
+    ///   weight times `Ω/ΔΩ`; it owns the pixel `ω` falls in;
+    /// * a larger leaf is drawn as its disk (radius inflated by 1.2) over the
+    ///   pixels whose centre ray hits its front; depth is the hit distance; a
+    ///   leaf covering no pixel centre (edge-on or between centres) is spread
+    ///   as above with `Ω` capped at the pixel's `ΔΩ`;
+    /// * a larger cluster is drawn as a soft cone around `ω`: coverage 1 in
+    ///   the middle, falling linearly across a rim as wide as the cone's
+    ///   radius (at least a pixel) and scaled so that it integrates to `Ω`.
+    ///   Radii are chords `|u − ω|`, for which a cap's solid angle is exactly
+    ///   `π·chord²`. It owns the pixels it covers by at least one half.
+    ///
+    /// Depth is the distance to the centre except on disks. A node whose
+    /// centre is the receiver's position has no direction and is skipped.
+    /// A node `tree` does not have is ignored.
+    pub fn splat(&mut self, tree: &Tree, node: NodeId) {
+        self.splat_inline(tree, node);
+    }
+
+    /// [`splat`](Self::splat), inlined into the caller (a traversal clone
+    /// calling it through [`MicroBufferSink`] compiles it with its own
+    /// instruction set).
+    #[inline(always)]
+    pub(crate) fn splat_inline(&mut self, tree: &Tree, node: NodeId) {
+        let Some(rec) = tree.splat.get(node as usize) else {
+            return;
+        };
+        if let Some(l) = self.locate(rec) {
+            self.apply(rec, node, &l);
+        }
+    }
+
+    /// The weight of pixel `p` in the convolution (`coverage·∫cosθ dω`, 0
+    /// when nothing touched it) and the node it shows (0 when none).
+    #[inline(always)]
+    fn weight(&self, p: usize) -> (f32, NodeId) {
+        let k = if self.own[p] != NO_KEY {
+            self.own[p]
+        } else {
+            self.any[p]
+        };
+        let valid = k != NO_KEY;
+        let cover = (self.cover[p] as f32 * (1.0 / COVER_ONE)).min_of(1.0);
+        let w = f32::select(valid, cover * self.table.cos_weight[p], 0.0);
+        (w, if valid { k as NodeId } else { 0 })
+    }
+
+    /// Irradiance: `Σ L·coverage·∫cosθ dω` over the pixels. The sum runs in
+    /// 16 interleaved partial sums (pixel `p` into sum `p mod 16`), added up
+    /// in order at the end: the order of the 16-lane convolution, so both
+    /// give the same bits.
+    pub fn irradiance(&self, tree: &Tree) -> Vec3 {
+        self.irradiance_inline(tree)
+    }
+
+    /// [`irradiance`](Self::irradiance), inlined into the caller (a clone of
+    /// the scalar pipeline compiles it with its own instruction set).
+    #[inline(always)]
+    pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
+        let mut acc = [[0.0f32; LANES]; 3];
+        for p in 0..self.table.cos_weight.len() {
+            let (w, k) = self.weight(p);
+            // Node 0 stands for an empty pixel (weight 0); a tree without it is empty.
+            let l = tree
+                .radiance_slice()
+                .get(k as usize)
+                .copied()
+                .unwrap_or(Vec3::ZERO);
+            let lane = p % LANES;
+            acc[0][lane] += l.x * w;
+            acc[1][lane] += l.y * w;
+            acc[2][lane] += l.z * w;
+        }
+        Vec3::new(sum(acc[0]), sum(acc[1]), sum(acc[2]))
+    }
+
+    /// Glossy reflection towards `wo` (world, unit):
+    /// `Σ L·coverage·f_s(ωi, ωo)·∫cosθ dω`, `ωi` the pixel centre, in pixel order.
+    pub fn glossy(&self, tree: &Tree, wo: Vec3, lobe: &GlossyLobe) -> Vec3 {
+        let n = self.frame[2];
+        let mut l = Vec3::ZERO;
+        for p in 0..self.pixels() {
+            let (w, k) = self.weight(p);
+            if w > 0.0 {
+                let wi = self.to_world(self.table.dir[p]);
+                let radiance = tree
+                    .radiance_slice()
+                    .get(k as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO);
+                l += radiance * lobe.eval(n, wo, wi) * w;
+            }
+        }
+        l
+    }
+
+    /// Ambient occlusion: the covered fraction of the cosine-weighted
+    /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1], summed like
+    /// [`irradiance`](Self::irradiance).
+    pub fn occlusion(&self) -> f32 {
+        self.occlusion_inline()
+    }
+
+    /// [`occlusion`](Self::occlusion), inlined into the caller.
+    #[inline(always)]
+    pub(crate) fn occlusion_inline(&self) -> f32 {
+        let mut acc = [0.0f32; LANES];
+        for p in 0..self.table.cos_weight.len() {
+            acc[p % LANES] += self.weight(p).0;
+        }
+        (sum(acc) * std::f32::consts::FRAC_1_PI).min_of(1.0)
+    }
+}
+
+/// A sink that splats each receiver's cut into its own microbuffer.
+pub struct MicroBufferSink<'a> {
+    /// The tree the cuts are of.
+    pub tree: &'a Tree,
+    /// One microbuffer per receiver, reset to that receiver.
+    pub buffers: &'a mut [MicroBuffer],
+}
+
+impl CutSink for MicroBufferSink<'_> {
+    #[inline(always)]
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        self.buffers[receiver].splat_inline(self.tree, node);
+    }
+}
+
+impl FrameLanes<F32s> {
+    /// The frames of up to 16 buffers in the lanes; unused lanes repeat the first.
+    #[inline(always)]
+    pub(super) fn of(bufs: &[MicroBuffer]) -> Self {
+        let mut f = [[0.0f32; LANES]; 12];
+        #[allow(clippy::needless_range_loop)] // `l` picks a buffer and a lane
+        for l in 0..LANES {
+            let b = bufs.get(l).unwrap_or(&bufs[0]).frame_lanes();
+            let v = [
+                b.px, b.py, b.pz, b.tx, b.ty, b.tz, b.bx, b.by, b.bz, b.nx, b.ny, b.nz,
+            ];
+            for (j, x) in v.into_iter().enumerate() {
+                f[j][l] = x;
+            }
+        }
+        let g = |j: usize| F32s::from_array(f[j]);
+        FrameLanes {
+            px: g(0),
+            py: g(1),
+            pz: g(2),
+            tx: g(3),
+            ty: g(4),
+            tz: g(5),
+            bx: g(6),
+            by: g(7),
+            bz: g(8),
+            nx: g(9),
+            ny: g(10),
+            nz: g(11),
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! Where a node falls in a receiver's microbuffer: its direction, distance,
+//! solid angle and map coordinates, written once over lanes like the node
+//! test, so one receiver (`f32`) and sixteen (`F32s`) get the same bits.
+
+
+use crate::simd::{F32s, Real};
+use crate::tree::SplatRecord;
+
+/// What splatting reads of a node, for one node or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct NodeSplat<V> {
+    pub cx: V,
+    pub cy: V,
+    pub cz: V,
+    pub area: V,
+    pub nx: V,
+    pub ny: V,
+    pub nz: V,
+}
+
+impl NodeSplat<f32> {
+    #[inline(always)]
+    pub(super) fn of(r: &SplatRecord) -> Self {
+        NodeSplat {
+            cx: r.center[0],
+            cy: r.center[1],
+            cz: r.center[2],
+            area: r.area,
+            nx: r.normal[0],
+            ny: r.normal[1],
+            nz: r.normal[2],
+        }
+    }
+
+    /// The same node in every lane.
+    #[inline(always)]
+    pub(super) fn splat(&self) -> NodeSplat<F32s> {
+        NodeSplat {
+            cx: F32s::splat(self.cx),
+            cy: F32s::splat(self.cy),
+            cz: F32s::splat(self.cz),
+            area: F32s::splat(self.area),
+            nx: F32s::splat(self.nx),
+            ny: F32s::splat(self.ny),
+            nz: F32s::splat(self.nz),
+        }
+    }
+}
+
+/// A receiver's position and tangent frame (`t`, `b`, `n`), for one
+/// receiver or one per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct FrameLanes<V> {
+    pub px: V,
+    pub py: V,
+    pub pz: V,
+    pub tx: V,
+    pub ty: V,
+    pub tz: V,
+    pub bx: V,
+    pub by: V,
+    pub bz: V,
+    pub nx: V,
+    pub ny: V,
+    pub nz: V,
+}
+
+
+/// A splat placed in a receiver's microbuffer: distance and direction
+/// (local) of its centre, projected solid angle, continuous pixel
+/// coordinates; `valid` is false where it cannot show.
+pub(crate) struct Located<V: Real> {
+    pub valid: V::Mask,
+    pub d: V,
+    pub omega: V,
+    pub wx: V,
+    pub wy: V,
+    pub wz: V,
+    pub x: V,
+    pub y: V,
+}
+
+/// Places node `s` in the microbuffer of receiver `f` (`half` = `N/2`).
+///
+/// `Ω = A·max(0, −n̄·ω)/d²`; the centre's local direction `w` goes through
+/// the octahedral map (a centre below the horizon to the horizon point
+/// above it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
+/// non-finite distance or `Ω`, a node facing away, a centre straight below.
+#[inline(always)]
+pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> Located<V> {
+    let vx = s.cx - f.px;
+    let vy = s.cy - f.py;
+    let vz = s.cz - f.pz;
+    let d2 = vx * vx + vy * vy + vz * vz;
+    let d = d2.sqrt();
+    let (dx, dy, dz) = (vx / d, vy / d, vz / d);
+    let zero = V::splat(0.0);
+    let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
+    let raw = s.area * facing.max_of(zero) / d2;
+    // A huge node right in front of the receiver overflows the far-field
+    // estimate; it covers at most the hemisphere.
+    let omega = raw.min_of(V::splat(std::f32::consts::TAU));
+    let wx = dx * f.tx + dy * f.ty + dz * f.tz;
+    let wy = dx * f.bx + dy * f.by + dz * f.bz;
+    let wz = dx * f.nx + dy * f.ny + dz * f.nz;
+    let sum = wx.abs() + wy.abs() + wz.max_of(zero);
+    let (px, py) = (wx / sum, wy / sum);
+    let one = V::splat(1.0);
+    let x = (px + py + one) * half;
+    let y = (px - py + one) * half;
+    let inf = V::splat(f32::INFINITY);
+    let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum);
+    Located {
+        valid,
+        d,
+        omega,
+        wx,
+        wy,
+        wz,
+        x,
+        y,
+    }
+}

@@ -1,0 +1,226 @@
+//! The octahedral hemisphere map and its per-pixel tables (exact solid
+//! angles and cosine integrals, pixel centres, footprint reach), built once
+//! per resolution and shared.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use glam::{DVec2, DVec3, Vec3};
+
+use crate::simd::LANES;
+
+/// Local unit direction of the point `(u, v)` of the square.
+pub(crate) fn unmap(u: f64, v: f64) -> DVec3 {
+    let (px, py) = (0.5 * (u + v), 0.5 * (u - v));
+    DVec3::new(px, py, (1.0 - px.abs() - py.abs()).max(0.0)).normalize()
+}
+
+/// `(u, v)` of a local direction with `z ≥ 0`.
+pub(crate) fn map64(d: DVec3) -> DVec2 {
+    let s = d.x.abs() + d.y.abs() + d.z;
+    DVec2::new((d.x + d.y) / s, (d.x - d.y) / s)
+}
+
+/// Solid angle of the triangle `(a, b, c)` seen from the origin (Van
+/// Oosterom and Strackee).
+fn triangle_solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let num = a.dot(b.cross(c)).abs();
+    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    2.0 * num.atan2(den)
+}
+
+/// `∫ cosθ dω` (θ from +z) over the convex polygon `poly` seen from the
+/// origin, by Lambert's formula: `½ Σ θᵢ (γᵢ · z)`, θᵢ the angle an edge
+/// subtends and γᵢ the unit normal of the plane through it and the origin.
+fn polygon_projected_solid_angle(poly: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let c = a.cross(b);
+        let len = c.length();
+        if len > 0.0 {
+            sum += len.atan2(a.dot(b)) * c.z / len;
+        }
+    }
+    (0.5 * sum).abs()
+}
+
+/// Clips the convex polygon `poly` (in the `(px, py)` plane) to `a·p ≥ 0`.
+fn clip(poly: &[DVec2], a: DVec2) -> Vec<DVec2> {
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (dp, dq) = (a.dot(p), a.dot(q));
+        if dp >= 0.0 {
+            out.push(p);
+        }
+        if (dp >= 0.0) != (dq >= 0.0) {
+            out.push(p + (q - p) * (dp / (dp - dq)));
+        }
+    }
+    out
+}
+
+/// Exact solid angle and `∫ cosθ dω` of the pixel `[u0, u1] × [v0, v1]`:
+/// per quadrant of the diamond the pixel is a planar polygon on a face of
+/// the octahedron `|x| + |y| + z = 1`.
+pub(crate) fn pixel_integrals(u0: f64, u1: f64, v0: f64, v1: f64) -> (f64, f64) {
+    let to_p = |u: f64, v: f64| DVec2::new(0.5 * (u + v), 0.5 * (u - v));
+    let square = [to_p(u0, v0), to_p(u1, v0), to_p(u1, v1), to_p(u0, v1)];
+    let (mut omega, mut projected) = (0.0, 0.0);
+    for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
+        let part = clip(&clip(&square, DVec2::new(sx, 0.0)), DVec2::new(0.0, sy));
+        if part.len() < 3 {
+            continue;
+        }
+        let lifted: Vec<DVec3> = part
+            .iter()
+            .map(|p| DVec3::new(p.x, p.y, 1.0 - sx * p.x - sy * p.y))
+            .collect();
+        for i in 1..lifted.len() - 1 {
+            omega += triangle_solid_angle(lifted[0], lifted[i], lifted[i + 1]);
+        }
+        projected += polygon_projected_solid_angle(&lifted);
+    }
+    (omega, projected)
+}
+
+/// Largest stretch of the map at `d`: `(u, v)` units per radian, the
+/// largest singular value of its Jacobian (one-sided differences).
+pub(crate) fn stretch_at(d: DVec3) -> f64 {
+    let (t1, t2) = d.any_orthonormal_pair();
+    let h = 1e-6;
+    let base = map64(d);
+    let mut cols = [DVec2::ZERO; 2];
+    for (col, t) in cols.iter_mut().zip([t1, t2]) {
+        let mut q = (d + t * h).normalize();
+        let mut sign = 1.0;
+        if q.z < 0.0 {
+            q = (d - t * h).normalize();
+            sign = -1.0;
+        }
+        *col = (map64(q) - base) * (sign / h);
+    }
+    let (a, c, b, e) = (cols[0].x, cols[0].y, cols[1].x, cols[1].y);
+    let t = a * a + b * b + c * c + e * e;
+    let det = a * e - b * c;
+    ((t + (t * t - 4.0 * det * det).max(0.0).sqrt()) * 0.5).sqrt()
+}
+
+/// Per-resolution pixel geometry, shared by all microbuffers of that resolution.
+#[derive(Debug)]
+pub(crate) struct Table {
+    pub(crate) n: usize,
+    /// Local unit direction of each pixel centre.
+    pub(crate) dir: Vec<Vec3>,
+    /// The same by component (what the cone and disk loops read), padded
+    /// with [`LANES`] zeros.
+    pub(crate) dir_x: Vec<f32>,
+    pub(crate) dir_y: Vec<f32>,
+    pub(crate) dir_z: Vec<f32>,
+    /// Exact solid angle of each pixel.
+    pub(crate) solid_angle: Vec<f32>,
+    /// Exact `∫ cosθ dω` over each pixel (θ from the normal, +z), padded
+    /// with zeros to a multiple of 16 pixels.
+    pub(crate) cos_weight: Vec<f32>,
+    /// Angular size of each pixel, `√ΔΩ`, padded with [`LANES`] zeros.
+    pub(crate) pixel_size: Vec<f32>,
+    /// The largest pixel size.
+    pub(crate) pixel_angle: f32,
+    /// Pixels per radian a footprint centred in each pixel can reach, for
+    /// footprints up to [`NEAR`] pixels wide: the largest stretch of the map
+    /// over the pixels around it, with a margin.
+    pub(crate) reach: Vec<f32>,
+    /// The same over the whole map, for wider footprints.
+    pub(crate) reach_max: f32,
+    /// The lowest pixel centre's height above the horizon (its `z`) and
+    /// the sine of its angle from the normal: no pixel's ray leans further.
+    pub(crate) lowest_z: f32,
+    pub(crate) lowest_sin: f32,
+}
+
+/// Footprints up to this many pixels from their centre use the local reach.
+pub(crate) const NEAR: usize = 2;
+
+impl Table {
+    pub(crate) fn new(n: usize) -> Table {
+        let h = 2.0 / n as f64;
+        let len = n * n;
+        let mut dir = Vec::with_capacity(len);
+        let mut solid_angle = Vec::with_capacity(len);
+        let mut cos_weight = Vec::with_capacity(len.next_multiple_of(16));
+        let mut stretch = Vec::with_capacity(len);
+        for r in 0..n {
+            for c in 0..n {
+                let (u0, v0) = (-1.0 + c as f64 * h, -1.0 + r as f64 * h);
+                let (omega, projected) = pixel_integrals(u0, u0 + h, v0, v0 + h);
+                dir.push(unmap(u0 + 0.5 * h, v0 + 0.5 * h).as_vec3());
+                solid_angle.push(omega as f32);
+                cos_weight.push(projected as f32);
+                // The stretch at the centre and near the corners (the map's
+                // derivative jumps across the diagonals u = ±v).
+                let mut s: f64 = 0.0;
+                for (fu, fv) in [(0.5, 0.5), (0.02, 0.02), (0.98, 0.02), (0.02, 0.98), (0.98, 0.98)] {
+                    let d = unmap(u0 + fu * h, v0 + fv * h);
+                    if d.z > 1e-9 {
+                        s = s.max(stretch_at(d));
+                    }
+                }
+                stretch.push(s);
+            }
+        }
+        cos_weight.resize(len.next_multiple_of(16), 0.0);
+        let pixels_per_unit = n as f64 * 0.5;
+        let mut reach = vec![0.0f32; len];
+        for r in 0..n {
+            for c in 0..n {
+                let mut s: f64 = 0.0;
+                for rr in r.saturating_sub(NEAR + 1)..(r + NEAR + 2).min(n) {
+                    for cc in c.saturating_sub(NEAR + 1)..(c + NEAR + 2).min(n) {
+                        s = s.max(stretch[rr * n + cc]);
+                    }
+                }
+                reach[r * n + c] = (s * pixels_per_unit * 1.1) as f32;
+            }
+        }
+        let lowest_z = dir.iter().map(|d| d.z).fold(1.0, f32::min);
+        let reach_max = (stretch.iter().copied().fold(0.0, f64::max) * pixels_per_unit * 1.1) as f32;
+        let mut pixel_size: Vec<f32> = solid_angle.iter().map(|w| w.sqrt()).collect();
+        let pixel_angle = pixel_size.iter().copied().fold(0.0, f32::max);
+        // Padded, so that a row of a 16-pixel tile loads in one piece
+        // anywhere in the grid (lanes past the last pixel are outside every box).
+        pixel_size.resize(len + LANES, 0.0);
+        let component = |f: fn(&Vec3) -> f32| {
+            let mut v: Vec<f32> = dir.iter().map(f).collect();
+            v.resize(len + LANES, 0.0);
+            v
+        };
+        let (dir_x, dir_y, dir_z) = (component(|d| d.x), component(|d| d.y), component(|d| d.z));
+        Table {
+            n,
+            dir,
+            dir_x,
+            dir_y,
+            dir_z,
+            solid_angle,
+            cos_weight,
+            pixel_size,
+            pixel_angle,
+            reach,
+            reach_max,
+            lowest_z,
+            lowest_sin: (1.0 - lowest_z * lowest_z).max(0.0).sqrt(),
+        }
+    }
+
+    /// The table of resolution `n`, built once per process.
+    pub(crate) fn shared(n: usize) -> Arc<Table> {
+        static TABLES: OnceLock<Mutex<HashMap<usize, Arc<Table>>>> = OnceLock::new();
+        let mut map = TABLES
+            .get_or_init(Default::default)
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        map.entry(n).or_insert_with(|| Arc::new(Table::new(n))).clone()
+    }
+}

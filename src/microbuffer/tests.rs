@@ -1,0 +1,205 @@
+//! Unit tests of the map, its tables, the footprints and the two draws.
+use glam::Vec3;
+
+use super::buffer::*;
+use super::locate::*;
+use super::plan::*;
+use super::table::*;
+use crate::rng::Rng;
+use crate::tree::{NodeId, SplatRecord};
+
+/// A unit-area cluster at `c` facing the origin.
+fn record(c: Vec3) -> SplatRecord {
+    SplatRecord {
+        center: c.to_array(),
+        area: 1.0,
+        normal: (-c).to_array(),
+        leaf: 0,
+    }
+}
+
+/// A node around the receiver at the origin (normal +z), of every kind
+/// the draws meet: far and near, tiny and huge, facing, edge-on, and
+/// coplanar with the receiver a rounding error above or below its plane.
+fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
+    let kind = (rng.f32() * 4.0) as u32;
+    let d = 10f32.powf(rng.f32() * 4.0 - 3.0);
+    let (center, normal) = match kind {
+        0 => {
+            // On the receiver's plane, normal nearly its own.
+            let c = rng.unit_vector() * Vec3::new(1.0, 1.0, 0.0);
+            let z = (rng.f32() - 0.5) * 1e-6 * d;
+            (c * d + Vec3::Z * z, (Vec3::Z + rng.unit_vector() * 1e-4).normalize())
+        }
+        1 => {
+            // Near the horizon, any normal.
+            let c = (rng.unit_vector() * Vec3::new(1.0, 1.0, 0.05)).normalize_or(Vec3::X);
+            (c * d, rng.unit_vector())
+        }
+        _ => (rng.unit_vector() * d, rng.unit_vector()),
+    };
+    SplatRecord {
+        center: center.to_array(),
+        area: d * d * 10f32.powf(rng.f32() * 5.0 - 4.0),
+        normal: normal.to_array(),
+        leaf: u32::from(leaf),
+    }
+}
+
+fn same_pixels(a: &MicroBuffer, b: &MicroBuffer) -> bool {
+    a.own == b.own && a.any == b.any && a.cover == b.cover
+}
+
+#[test]
+fn tiled_draws_write_the_pixels_of_the_scalar_draws() {
+    let mut rng = Rng::new(1);
+    let (mut drawn, mut hits) = (0, 0);
+    for n in [1, 2, 3, 4, 5, 7, 8, 9, 12, 16, 17, 33, 64] {
+        let mut a = MicroBuffer::new(n).unwrap();
+        let mut b = MicroBuffer::new(n).unwrap();
+        for i in 0..600 {
+            let (frame_n, node) = (Vec3::Z, i as NodeId);
+            a.reset(Vec3::ZERO, frame_n);
+            b.reset(Vec3::ZERO, frame_n);
+            let leaf = i % 2 == 0;
+            let rec = node_around(&mut rng, leaf);
+            let Some(l) = a.locate(&rec) else { continue };
+            let t = a.table.clone();
+            let pixel = pixel_of(&t, l.x, l.y);
+            let visible = 0.0 < l.wz;
+            drawn += 1;
+            if leaf {
+                let plan =
+                    plan_disk(&t, &a.frame_lanes(), &NodeSplat::of(&rec), l.x, l.y, pixel, l.d);
+                let hit = a.draw_disk(&plan, node);
+                assert_eq!(hit, b.draw_disk_tiles(&plan, node), "N {n}, node {rec:?}");
+                assert!(same_pixels(&a, &b), "disk: N {n}, node {rec:?}");
+                // The cull of disks that cannot face any pixel drops no hit.
+                let mut c = MicroBuffer::new(n).unwrap();
+                c.reset(Vec3::ZERO, frame_n);
+                let unculled = DiskPlan { fronts: true, ..plan };
+                assert_eq!(hit, c.draw_disk(&unculled, node), "cull: N {n}, node {rec:?}");
+                assert!(same_pixels(&a, &c), "cull: N {n}, node {rec:?}");
+                hits += usize::from(hit);
+            } else {
+                let plan = plan_cone(&t, l.x, l.y, pixel, l.omega, visible);
+                let w = Vec3::new(l.wx, l.wy, l.wz);
+                a.draw_cone(w, &plan, key(l.d, node));
+                b.draw_cone_tiles(w, &plan, key(l.d, node));
+                assert!(same_pixels(&a, &b), "cone: N {n}, node {rec:?}");
+                hits += usize::from(a.cover.iter().any(|&c| c > 0));
+            }
+        }
+    }
+    // The cases must draw something, or the comparison proves nothing.
+    assert!(drawn > 3000 && hits > 1000, "{drawn} drawn, {hits} with pixels");
+}
+
+#[test]
+fn pixels_integrate_to_the_hemisphere_exactly() {
+    for n in [1, 2, 3, 8, 17, 64, 256] {
+        let t = Table::new(n);
+        let total: f64 = t.solid_angle.iter().map(|&x| x as f64).sum();
+        let cosine: f64 = t.cos_weight.iter().map(|&x| x as f64).sum();
+        assert!(
+            (total / (2.0 * std::f64::consts::PI) - 1.0).abs() < 1e-5,
+            "n {n}: Σ ΔΩ = {total}"
+        );
+        assert!(
+            (cosine / std::f64::consts::PI - 1.0).abs() < 1e-5,
+            "n {n}: Σ ∫cos dω = {cosine}"
+        );
+    }
+}
+
+#[test]
+fn pixel_integrals_match_a_fine_quadrature() {
+    let n = 6;
+    let t = Table::new(n);
+    let h = 2.0 / n as f64;
+    let m = 400;
+    // Pixels off the diagonals u = ±v (where the map has a kink the
+    // midpoint rule converges slowly across), then pixels on them.
+    for (p, tol) in [
+        (1, 1e-4),
+        (2, 1e-4),
+        (9, 1e-4),
+        (12, 1e-4),
+        (26, 1e-4),
+        (0, 5e-3),
+        (7, 5e-3),
+        (20, 5e-3),
+    ] {
+        let (c, r) = (p % n, p / n);
+        let (mut omega, mut projected) = (0.0, 0.0);
+        let g = h / m as f64;
+        for i in 0..m {
+            for j in 0..m {
+                let (u, v) = (
+                    -1.0 + c as f64 * h + (i as f64 + 0.5) * g,
+                    -1.0 + r as f64 * h + (j as f64 + 0.5) * g,
+                );
+                // Area element of the map by finite differences.
+                let e = 1e-7;
+                let d = unmap(u, v);
+                let du = (unmap(u + e, v) - d) / e;
+                let dv = (unmap(u, v + e) - d) / e;
+                let da = du.cross(dv).length() * g * g;
+                omega += da;
+                projected += da * d.z;
+            }
+        }
+        assert!(
+            (omega / t.solid_angle[p] as f64 - 1.0).abs() < tol,
+            "pixel {p}: {omega} vs {}",
+            t.solid_angle[p]
+        );
+        assert!(
+            (projected / t.cos_weight[p] as f64 - 1.0).abs() < tol,
+            "pixel {p}: {projected} vs {}",
+            t.cos_weight[p]
+        );
+    }
+}
+
+#[test]
+fn every_pixel_centre_lands_in_its_pixel() {
+    for n in [1, 4, 8, 13] {
+        let mut mb = MicroBuffer::new(n).unwrap();
+        mb.reset(Vec3::ZERO, Vec3::Z);
+        for (p, d) in mb.table.dir.clone().iter().enumerate() {
+            let l = mb.locate(&record(*d)).expect("upper hemisphere");
+            assert_eq!(
+                pixel_of(&mb.table, l.x, l.y),
+                p as f32,
+                "n {n} pixel {p} dir {d}"
+            );
+        }
+    }
+}
+
+#[test]
+fn footprints_reach_every_pixel_within_their_angle() {
+    let n = 16;
+    let mut mb = MicroBuffer::new(n).unwrap();
+    mb.reset(Vec3::ZERO, Vec3::Z);
+    let t = mb.table.clone();
+    for (i, w) in t.dir.iter().enumerate().step_by(3) {
+        let l = mb.locate(&record(*w)).unwrap();
+        let pixel = pixel_of(&t, l.x, l.y);
+        for angle in [0.05f32, 0.2, 0.5, 1.0] {
+            let b = footprint(&t, l.x, l.y, pixel, angle);
+            let (c0, c1, r0, r1) = (b.c0 as usize, b.c1 as usize, b.r0 as usize, b.r1 as usize);
+            for (p, d) in t.dir.iter().enumerate() {
+                if d.dot(*w).clamp(-1.0, 1.0).acos() < angle * 0.999 {
+                    let (c, r) = (p % n, p / n);
+                    assert!(
+                        (c0..=c1).contains(&c) && (r0..=r1).contains(&r),
+                        "pixel {p} is {:.3} rad from pixel {i}, outside the box of angle {angle}",
+                        d.dot(*w).acos()
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,37 @@
+//! Rendering a scene with point-based global illumination: camera rays give
+//! the receivers (4×4 pixel tiles make the packets), the kernels give their
+//! cuts, the microbuffer splats and convolves them, direct light comes from
+//! shadow rays. Stages a scene does not need are left out, and said so.
+//!
+//! Data enters as a [`Scene`](crate::scene::Scene) and [`RenderOptions`];
+//! it leaves as a [`RenderOutput`] (image, Table-1 times, counters, stages).
+//! The files, in data-flow order: `options`; `trace` (ray queries), `light`
+//! (direct light), `bake` (surfels with their direct light), `bounces`
+//! (extra bounces at the surfels); `shading` (shading points), `packets` (a
+//! packet's cuts and their shading), `frame` (the frame, tile by tile);
+//! `image` and `output` (what comes out); `reference` (the path tracer the
+//! report measures against).
+
+mod bake;
+mod bounces;
+mod frame;
+mod image;
+mod light;
+mod options;
+mod output;
+mod packets;
+pub mod reference;
+mod shading;
+mod trace;
+
+pub use bake::{BakeOptions, Baked, bake};
+pub use frame::{Frame, render};
+pub(crate) use frame::PacketPoint;
+pub use image::Image;
+pub use light::Lights;
+pub use options::RenderOptions;
+pub use output::{RenderError, RenderOutput, Stage, Timings};
+pub(crate) use packets::PacketCuts;
+pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
+pub(crate) use shading::shading_point;
+pub use trace::{Hit, Tracer};

@@ -1,0 +1,92 @@
+//! What a render reports: the image, the paper's Table 1 times, counters,
+//! and which stages ran; and its errors.
+
+use super::image::Image;
+use crate::cut::{Scheme, SchemeChoice, TraversalStats};
+use crate::error::Error;
+use crate::scene::SceneError;
+use crate::simd::Isa;
+
+/// Seconds per stage, summed over threads (the paper's Table 1 columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Point cloud (surfels + their direct light + extra bounces) and tree.
+    pub pre: f64,
+    /// Cut traversal.
+    pub trav: f64,
+    /// Splatting and convolution.
+    pub others: f64,
+    /// Camera rays and direct light at the receivers.
+    pub direct: f64,
+    /// Wall-clock seconds of the whole render.
+    pub total_wall: f64,
+}
+
+/// One pipeline stage and whether it ran.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Stage {
+    /// What it is.
+    pub name: &'static str,
+    /// `None` if it ran, else why it was left out.
+    pub skipped: Option<String>,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The image.
+    pub image: Image,
+    /// Stage times.
+    pub timings: Timings,
+    /// Traversal counters over all receivers.
+    pub stats: TraversalStats,
+    /// The scheme that ran (on full packets, under `auto`).
+    pub scheme: Scheme,
+    /// The choice it came from.
+    pub choice: SchemeChoice,
+    /// The instruction-set path that ran.
+    pub isa: Isa,
+    /// Surfels in the cloud (0 when none was needed).
+    pub surfels: usize,
+    /// Receivers shaded.
+    pub receivers: usize,
+    /// Every stage, run or left out.
+    pub stages: Vec<Stage>,
+}
+
+/// Errors of a render.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The scene is unusable.
+    Scene(SceneError),
+    /// A kernel-layer error (options, ISA, invalid surfels).
+    Kernel(Error),
+    /// A self-check failed (a scheme's cuts differ from the reference's, or
+    /// an image does not match its reference's size).
+    Check(String),
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RenderError::Scene(e) => e.fmt(f),
+            RenderError::Kernel(e) => e.fmt(f),
+            RenderError::Check(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+impl From<Error> for RenderError {
+    fn from(e: Error) -> Self {
+        RenderError::Kernel(e)
+    }
+}
+
+impl From<SceneError> for RenderError {
+    fn from(e: SceneError) -> Self {
+        RenderError::Scene(e)
+    }
+}

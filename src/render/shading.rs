@@ -1,0 +1,76 @@
+//! Shading points: where a camera ray (or a path) hits, with the shading
+//! normal (interpolated, bumped) and the emitted radiance.
+
+use glam::Vec3;
+
+use super::trace::{Hit, Tracer};
+use crate::scene::{Bump, Material, Scene};
+
+/// Tilts `n` by the procedural bump at `p`.
+fn bumped(n: Vec3, p: Vec3, bump: &Bump) -> Vec3 {
+    let (t, b) = n.any_orthonormal_pair();
+    let w = std::f32::consts::TAU * bump.frequency;
+    let tilt = t * (w * p.dot(t)).sin() + b * (w * p.dot(b) + 1.3).sin();
+    (n + tilt * bump.amplitude).normalize()
+}
+
+/// A shading point: where a camera ray hit, how to shade it.
+pub(crate) struct ShadingPoint {
+    /// Hit point, moved off the surface by the tracer's epsilon.
+    pub position: Vec3,
+    /// Shading normal on the viewer's side.
+    pub normal: Vec3,
+    /// Unit direction back to the viewer.
+    pub wo: Vec3,
+    /// Material index.
+    pub material: usize,
+    /// Emitted radiance towards the viewer.
+    pub emitted: Vec3,
+}
+
+pub(crate) fn shading_point(
+    scene: &Scene,
+    tracer: &Tracer,
+    origin: Vec3,
+    dir: Vec3,
+    hit: &Hit,
+) -> Option<ShadingPoint> {
+    let mesh = &scene.meshes[hit.mesh as usize];
+    let material: &Material = &scene.materials[mesh.material];
+    let mut ng = hit.geometric_normal;
+    let front = ng.dot(dir) < 0.0;
+    if !front {
+        if !material.two_sided {
+            return None; // a one-sided surface seen from behind is black
+        }
+        ng = -ng;
+    }
+    let position = origin + dir * hit.t;
+    let mut normal = match &mesh.normals {
+        Some(normals) => {
+            let t = mesh.triangles[hit.triangle as usize];
+            let (u, v) = (hit.uv.x, hit.uv.y);
+            let ns = normals[t[0] as usize] * (1.0 - u - v)
+                + normals[t[1] as usize] * u
+                + normals[t[2] as usize] * v;
+            let ns = ns.normalize_or(ng);
+            if ns.dot(ng) > 0.0 { ns } else { ng }
+        }
+        None => ng,
+    };
+    if let Some(b) = &material.bump {
+        normal = bumped(normal, position, b);
+    }
+    let emitted = if front {
+        mesh.emission.unwrap_or(Vec3::ZERO)
+    } else {
+        Vec3::ZERO
+    };
+    Some(ShadingPoint {
+        position: position + ng * tracer.epsilon(),
+        normal,
+        wo: -dir,
+        material: mesh.material,
+        emitted,
+    })
+}
