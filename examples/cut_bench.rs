@@ -96,7 +96,9 @@ fn parse_args() -> Result<Args, String> {
             "--tiles" => args.tiles = parse_count(&value()?)?,
             "--max_solid_angle" => {
                 let v = value()?;
-                args.max_solid_angle = v.parse().map_err(|_| format!("--max_solid_angle: `{v}` is not a number"))?;
+                args.max_solid_angle = v
+                    .parse()
+                    .map_err(|_| format!("--max_solid_angle: `{v}` is not a number"))?;
             }
             "--threshold" => {
                 let v = value()?;

@@ -1,7 +1,5 @@
 //! Surfels: the oriented disks that carry the scene's outgoing radiance.
 
-#[cfg(feature = "render")]
-
 use glam::Vec3;
 
 use crate::error::{Error, Invalid, NORMAL_TOLERANCE};

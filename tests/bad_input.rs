@@ -14,7 +14,7 @@ use pbgi::microbuffer::MicroBuffer;
 use pbgi::points::{MAX_COORDINATE, MAX_RADIANCE};
 use pbgi::render::{BakeOptions, ReferenceOptions, RenderOptions, bake, render, render_reference};
 use pbgi::scene::builtin::cornell_box;
-use pbgi::scene::load::load;
+use pbgi::scene::load;
 use pbgi::scene::{Glossy, Light, Scene};
 use pbgi::{CutOptions, Isa, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 

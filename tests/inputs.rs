@@ -9,7 +9,9 @@ mod common;
 
 use common::{CloudSpec, Rng, path_names, qc};
 use glam::Vec3;
-use pbgi::{CutOptions, Error, Invalid, Isa, IsaError, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
+use pbgi::{
+    CutOptions, Error, Invalid, Isa, IsaError, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree,
+};
 use quickcheck::{Arbitrary, Gen, TestResult};
 
 fn ok() -> Surfel {

@@ -2,8 +2,8 @@
 //! analytic case, and the point-based renderer agrees with it there.
 
 use glam::Vec3;
-use pbgi::render::{ReferenceOptions, render_reference};
 use pbgi::render::{Image, RenderOptions, render};
+use pbgi::render::{ReferenceOptions, render_reference};
 use pbgi::scene::builtin::cornell_box;
 use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use pbgi::scene::SceneError;
 use pbgi::scene::builtin::cornell_box;
-use pbgi::scene::load::{load, load_with, resolve};
+use pbgi::scene::{load, load_with, resolve};
 
 fn cbox() -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cornell-box/cbox.xml");

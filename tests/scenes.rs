@@ -8,8 +8,9 @@
 use std::path::PathBuf;
 
 use pbgi::render::{RenderOptions, render};
-use pbgi::scene::load::{read_obj, resolve_in};
-use pbgi::scene::{Light, Scene, SceneError, available_scenes_in, builtin, fetched, nave};
+use pbgi::scene::formats::read_obj;
+use pbgi::scene::resolve_in;
+use pbgi::scene::{Light, Scene, SceneError, available_scenes_in, builtin, catalogue, nave};
 
 /// A tiny, quick render: no NaN, not black.
 fn renders(mut scene: Scene, density: f32) {
@@ -87,9 +88,9 @@ fn temp_dir(tag: &str) -> PathBuf {
 #[test]
 fn a_missing_fetched_scene_names_the_file_and_the_script() {
     let empty = temp_dir("empty");
-    for name in fetched::NAMES {
+    for name in catalogue::FETCHED {
         for e in [
-            fetched::scene_in(name, &empty).unwrap_err(),
+            catalogue::fetched_scene_in(name, &empty).unwrap_err(),
             resolve_in(name, &empty).unwrap_err(),
         ] {
             let SceneError::MissingSceneData { scene, file } = &e else {
@@ -97,7 +98,7 @@ fn a_missing_fetched_scene_names_the_file_and_the_script() {
             };
             assert_eq!(scene, name);
             assert!(file.starts_with(&empty), "{}", file.display());
-            let first = fetched::files(name).unwrap()[0];
+            let first = catalogue::files(name).unwrap()[0];
             assert!(file.ends_with(first), "{}", file.display());
             let text = e.to_string();
             assert!(text.contains("scripts/fetch-scenes.sh"), "{text}");
@@ -130,8 +131,8 @@ fn a_half_fetched_scene_names_the_missing_file() {
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     )
     .unwrap();
-    assert!(!fetched::is_present_in("cornell-box-embree", &dir));
-    match fetched::scene_in("cornell-box-embree", &dir).unwrap_err() {
+    assert!(!catalogue::is_present_in("cornell-box-embree", &dir));
+    match catalogue::fetched_scene_in("cornell-box-embree", &dir).unwrap_err() {
         SceneError::MissingSceneData { file, .. } => assert!(file.ends_with("cornell_box.mtl")),
         e => panic!("expected MissingSceneData, got {e}"),
     }
@@ -146,7 +147,7 @@ fn a_broken_fetched_file_is_a_typed_error_with_its_line() {
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 99\n",
     )
     .unwrap();
-    match fetched::scene_in("sponza", &dir).unwrap_err() {
+    match catalogue::fetched_scene_in("sponza", &dir).unwrap_err() {
         SceneError::Parse { path, line, .. } => {
             assert!(path.ends_with("sponza/sponza.obj"));
             assert_eq!(line, 5);
@@ -178,26 +179,26 @@ fn an_obj_without_its_mtl_keeps_its_material_names_with_a_warning() {
     assert!(
         obj.materials
             .iter()
-            .all(|m| m.albedo == glam::Vec3::splat(pbgi::scene::load::MISSING_MTL_GREY))
+            .all(|m| m.albedo == glam::Vec3::splat(pbgi::scene::formats::MISSING_MTL_GREY))
     );
 }
 
 /// The fetched scene `name` from the scene folder, or `None` with the reason printed.
 fn fetched_or_skip(name: &str) -> Option<Scene> {
-    let dir = fetched::scene_dir();
-    if !fetched::is_present_in(name, &dir) {
+    let dir = catalogue::scene_dir();
+    if !catalogue::is_present_in(name, &dir) {
         eprintln!(
             "skipped {name}: its files are not in {} (run scripts/fetch-scenes.sh)",
             dir.display()
         );
         return None;
     }
-    Some(fetched::scene_in(name, &dir).unwrap_or_else(|e| panic!("{name}: {e}")))
+    Some(catalogue::fetched_scene_in(name, &dir).unwrap_or_else(|e| panic!("{name}: {e}")))
 }
 
 #[test]
 fn fetched_scenes_load_and_render_when_present() {
-    for name in fetched::NAMES {
+    for name in catalogue::FETCHED {
         let Some(scene) = fetched_or_skip(name) else {
             continue;
         };
@@ -286,7 +287,7 @@ fn the_cli_honours_pbgi_scene_dir() {
     let out = pbgi_command()
         .args(["render", "bunny", "-o"])
         .arg(empty.join("x.png"))
-        .env(fetched::SCENE_DIR_ENV, &empty)
+        .env(catalogue::SCENE_DIR_ENV, &empty)
         .output()
         .unwrap();
     assert!(!out.status.success());
@@ -298,7 +299,7 @@ fn the_cli_honours_pbgi_scene_dir() {
     );
     let list = pbgi_command()
         .arg("scenes")
-        .env(fetched::SCENE_DIR_ENV, &empty)
+        .env(catalogue::SCENE_DIR_ENV, &empty)
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&list.stdout);

@@ -44,7 +44,7 @@ fuzz_target!(|data: &[u8]| {
     }
     let path = dir.join(format!("input.{ext}"));
     if std::fs::write(&path, parts[0]).is_ok()
-        && let Ok(scene) = pbgi::scene::load::load(&path)
+        && let Ok(scene) = pbgi::scene::load(&path)
     {
         // What loads is valid.
         scene.validate().expect("a loaded scene validates");

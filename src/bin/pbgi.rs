@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::render::{Image, ReferenceOptions, RenderOptions, RenderOutput, render, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
-use pbgi::scene::load::resolve;
+use pbgi::scene::resolve;
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
@@ -313,14 +313,14 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
 }
 
 fn cmd_scenes() -> Res<()> {
-    use pbgi::scene::{builtin, fetched};
+    use pbgi::scene::{builtin, catalogue};
     for name in builtin::NAMES {
         println!("{name:<20} built-in");
     }
-    let dir = fetched::scene_dir();
-    for name in fetched::NAMES {
-        let files = fetched::files(name).unwrap_or_default();
-        if fetched::is_present_in(name, &dir) {
+    let dir = catalogue::scene_dir();
+    for name in catalogue::FETCHED {
+        let files = catalogue::files(name).unwrap_or_default();
+        if catalogue::is_present_in(name, &dir) {
             println!("{name:<20} fetched: {}", dir.join(files[0]).display());
         } else {
             println!(
@@ -350,9 +350,7 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
         bounces: a.bounces,
         ..Default::default()
     };
-    let out = pool.install(|| {
-        render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
-    })?;
+    let out = pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     println!(
@@ -602,9 +600,7 @@ fn cmd_report(a: &ReportArgs) -> Res<()> {
             bounces: a.settings.bounces as i32,
             ..Default::default()
         };
-        let out = pool.install(|| {
-            render_reference(&scene, &opts, &|done, total| tick(&bar, done, total))
-        })?;
+        let out = pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
         bar.finish_and_clear();
         write_image(&out.image, &ref_path)?;
         println!(

@@ -118,7 +118,11 @@ pub(crate) fn far<V: Real>(node: &NodeLanes<V>, o: &Offset<V>, max_solid_angle: 
 
 /// Discard and far masks of the whole test, evaluated eagerly (for lanes).
 #[inline(always)]
-pub(crate) fn classify<V: Real>(node: &NodeLanes<V>, rec: &ReceiverLanes<V>, max_solid_angle: V) -> (V::Mask, V::Mask) {
+pub(crate) fn classify<V: Real>(
+    node: &NodeLanes<V>,
+    rec: &ReceiverLanes<V>,
+    max_solid_angle: V,
+) -> (V::Mask, V::Mask) {
     let o = offset(node, rec);
     let discard = below_horizon(node, rec, &o) | faces_away(node, &o);
     (discard, far(node, &o, max_solid_angle))

@@ -2,8 +2,8 @@
 //! shared stack whose entries carry the mask of lanes still traversing (the
 //! paper's node queue and mask queue).
 
-use super::hybrid;
 use super::classify::{ReceiverLanes, classify, load_node};
+use super::hybrid;
 use super::single::PairStack;
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 use crate::simd::{F32s, LANES, lane_mask, set_bits};

@@ -2,7 +2,6 @@
 //! solid angle and map coordinates, written once over lanes like the node
 //! test, so one receiver (`f32`) and sixteen (`F32s`) get the same bits.
 
-
 use crate::simd::{F32s, Real};
 use crate::tree::SplatRecord;
 
@@ -64,7 +63,6 @@ pub(crate) struct FrameLanes<V> {
     pub ny: V,
     pub nz: V,
 }
-
 
 /// A splat placed in a receiver's microbuffer: distance and direction
 /// (local) of its centre, projected solid angle, continuous pixel

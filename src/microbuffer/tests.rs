@@ -29,7 +29,10 @@ fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
             // On the receiver's plane, normal nearly its own.
             let c = rng.unit_vector() * Vec3::new(1.0, 1.0, 0.0);
             let z = (rng.f32() - 0.5) * 1e-6 * d;
-            (c * d + Vec3::Z * z, (Vec3::Z + rng.unit_vector() * 1e-4).normalize())
+            (
+                c * d + Vec3::Z * z,
+                (Vec3::Z + rng.unit_vector() * 1e-4).normalize(),
+            )
         }
         1 => {
             // Near the horizon, any normal.
@@ -69,8 +72,7 @@ fn tiled_draws_write_the_pixels_of_the_scalar_draws() {
             let visible = 0.0 < l.wz;
             drawn += 1;
             if leaf {
-                let plan =
-                    plan_disk(&t, &a.frame_lanes(), &NodeSplat::of(&rec), l.x, l.y, pixel, l.d);
+                let plan = plan_disk(&t, &a.frame_lanes(), &NodeSplat::of(&rec), l.x, l.y, pixel, l.d);
                 let hit = a.draw_disk(&plan, node);
                 assert_eq!(hit, b.draw_disk_tiles(&plan, node), "N {n}, node {rec:?}");
                 assert!(same_pixels(&a, &b), "disk: N {n}, node {rec:?}");
@@ -169,11 +171,7 @@ fn every_pixel_centre_lands_in_its_pixel() {
         mb.reset(Vec3::ZERO, Vec3::Z);
         for (p, d) in mb.table.dir.clone().iter().enumerate() {
             let l = mb.locate(&record(*d)).expect("upper hemisphere");
-            assert_eq!(
-                pixel_of(&mb.table, l.x, l.y),
-                p as f32,
-                "n {n} pixel {p} dir {d}"
-            );
+            assert_eq!(pixel_of(&mb.table, l.x, l.y), p as f32, "n {n} pixel {p} dir {d}");
         }
     }
 }

@@ -10,10 +10,10 @@ use rayon::prelude::*;
 
 use super::bake::{BakeOptions, bake};
 use super::bounces::gather_bounce;
+use super::image::Image;
 use super::light::Lights;
 use super::options::RenderOptions;
 use super::output::{RenderError, RenderOutput, Stage, Timings};
-use super::image::Image;
 use super::packets::PacketCuts;
 use super::shading::{ShadingPoint, shading_point};
 use super::trace::Tracer;

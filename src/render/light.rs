@@ -3,9 +3,9 @@
 
 use glam::Vec3;
 
-use crate::scene::{Light, Scene};
 use super::trace::Tracer;
 use crate::rng::Rng;
+use crate::scene::{Light, Scene};
 
 /// The scene's emitters, ready to sample.
 pub struct Lights {

@@ -25,8 +25,8 @@ mod shading;
 mod trace;
 
 pub use bake::{BakeOptions, Baked, bake};
-pub use frame::{Frame, render};
 pub(crate) use frame::PacketPoint;
+pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
 pub use options::RenderOptions;

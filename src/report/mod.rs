@@ -301,8 +301,9 @@ pub fn path_tracer_time_for(points: &[ErrorPoint], error: f64) -> Option<f64> {
 
 /// The sweep as CSV: one line per image.
 pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
-    let mut s =
-        String::from("scene,method,scheme,max_solid_angle,microbuffer,spp,pre_s,trav_s,others_s,total_s,rel_rmse\n");
+    let mut s = String::from(
+        "scene,method,scheme,max_solid_angle,microbuffer,spp,pre_s,trav_s,others_s,total_s,rel_rmse\n",
+    );
     for p in points {
         let (method, scheme, max_solid_angle, n, spp) = match p.method {
             Method::PointBased {

@@ -7,104 +7,19 @@
 //! | `sponza`, `sponza-bump` | `sponza/sponza.obj` | crate `bvh` 0.13.0 (Dabrovic Sponza) |
 //! | `cornell-box-embree` | `cornell-box-embree/cornell_box.{obj,mtl}` | Debian `python3-tinyobjloader` (Embree's box) |
 //!
-//! The folder is `$PBGI_SCENE_DIR`, else `scenes/` in this repository.
-//! Asking for a scene whose file is missing is a
-//! [`SceneError::MissingSceneData`] naming the file and the script.
+//! Which files they need and where they are looked for: [`catalogue`](super::catalogue).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::Vec3;
 
-use super::load::read_obj;
+use super::formats::read_obj;
 use super::{Bump, Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, builtin};
-
-/// Names of the scenes built on fetched files.
-pub const NAMES: [&str; 5] = [
-    "bunny",
-    "bunny-glossy",
-    "sponza",
-    "sponza-bump",
-    "cornell-box-embree",
-];
-
-/// The environment variable naming the scene folder.
-pub const SCENE_DIR_ENV: &str = "PBGI_SCENE_DIR";
 
 /// Sponza's scale: its 35 × 16.5 × 15.6 model units become 3.5 × 1.65 × 1.56,
 /// so the default surfel density (2000 per unit area) gives about 200,000
 /// surfels rather than 15 million.
 pub const SPONZA_SCALE: f32 = 0.1;
-
-/// The scene folder: `$PBGI_SCENE_DIR` when set and not empty, else `scenes/`
-/// in the repository this library was built from (where the script puts it).
-pub fn scene_dir() -> PathBuf {
-    match std::env::var_os(SCENE_DIR_ENV) {
-        Some(d) if !d.is_empty() => PathBuf::from(d),
-        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
-    }
-}
-
-/// The files scene `name` needs, relative to the scene folder (`None` for an unknown name).
-pub fn files(name: &str) -> Option<&'static [&'static str]> {
-    Some(match name {
-        "bunny" | "bunny-glossy" => &["bunny/bunny.obj"],
-        "sponza" | "sponza-bump" => &["sponza/sponza.obj"],
-        "cornell-box-embree" => &[
-            "cornell-box-embree/cornell_box.obj",
-            "cornell-box-embree/cornell_box.mtl",
-        ],
-        _ => return None,
-    })
-}
-
-/// The first file of scene `name` missing from `dir` (`None`: all present, or an unknown name).
-fn missing_in(name: &str, dir: &Path) -> Option<PathBuf> {
-    files(name)?.iter().map(|f| dir.join(f)).find(|p| !p.is_file())
-}
-
-/// Whether scene `name` is known and all its files are in `dir`.
-pub fn is_present_in(name: &str, dir: &Path) -> bool {
-    files(name).is_some() && missing_in(name, dir).is_none()
-}
-
-/// The fetched scenes whose files are in `dir`.
-pub fn available_in(dir: &Path) -> Vec<String> {
-    NAMES
-        .iter()
-        .filter(|n| is_present_in(n, dir))
-        .map(|n| n.to_string())
-        .collect()
-}
-
-/// Scene `name` from the scene folder ([`scene_dir`]).
-pub fn scene(name: &str) -> Result<Scene, SceneError> {
-    scene_in(name, &scene_dir())
-}
-
-/// Scene `name` with its files read from `dir`.
-pub fn scene_in(name: &str, dir: &Path) -> Result<Scene, SceneError> {
-    if files(name).is_none() {
-        return Err(SceneError::UnknownScene {
-            name: name.to_string(),
-            builtins: builtin::NAMES.iter().chain(NAMES.iter()).copied().collect(),
-        });
-    }
-    if let Some(file) = missing_in(name, dir) {
-        return Err(SceneError::MissingSceneData {
-            scene: name.to_string(),
-            file,
-        });
-    }
-    let scene = match name {
-        "bunny" => bunny(dir, false)?,
-        "bunny-glossy" => bunny(dir, true)?,
-        "sponza" => sponza(dir, false)?,
-        "sponza-bump" => sponza(dir, true)?,
-        _ => cornell_box_embree(dir)?,
-    };
-    scene.validate()?;
-    Ok(scene)
-}
 
 /// All meshes of an OBJ merged into one (keeping the first's material).
 fn merged(meshes: Vec<Mesh>, name: &str) -> Mesh {
@@ -156,7 +71,7 @@ fn smooth_normals(mesh: &Mesh) -> Vec<Vec3> {
 
 /// The paper's "Bunny": the Stanford bunny on the floor of the built-in
 /// Cornell box (its blocks taken out), diffuse white, or glossy on a glossy floor.
-fn bunny(dir: &Path, glossy: bool) -> Result<Scene, SceneError> {
+pub(super) fn bunny(dir: &Path, glossy: bool) -> Result<Scene, SceneError> {
     let path = dir.join("bunny/bunny.obj");
     let obj = read_obj(&path)?;
     let mut mesh = merged(obj.meshes, "bunny");
@@ -250,7 +165,7 @@ fn sponza_albedo(name: &str) -> Vec3 {
 /// atrium, warm point lights in the arcades, a camera at the west end of the
 /// atrium looking along it. `bump`: procedural bump on walls and floor and a
 /// glossy floor.
-fn sponza(dir: &Path, bump: bool) -> Result<Scene, SceneError> {
+pub(super) fn sponza(dir: &Path, bump: bool) -> Result<Scene, SceneError> {
     let path = dir.join("sponza/sponza.obj");
     let obj = read_obj(&path)?;
     let mut materials = obj.materials;
@@ -323,7 +238,7 @@ fn sponza(dir: &Path, bump: bool) -> Result<Scene, SceneError> {
 
 /// Embree's Cornell box (the classic measured data, millimetres) scaled to
 /// about 2 units, seen by the classic camera; the light is its `Ka 20`.
-fn cornell_box_embree(dir: &Path) -> Result<Scene, SceneError> {
+pub(super) fn cornell_box_embree(dir: &Path) -> Result<Scene, SceneError> {
     let path = dir.join("cornell-box-embree/cornell_box.obj");
     let obj = read_obj(&path)?;
     let (centre, k) = (Vec3::new(278.0, 274.4, 279.6), 2.0 / 556.0);

@@ -8,11 +8,22 @@
 //! `formats`); [`available_scenes`] lists the names usable now.
 
 pub mod builtin;
+pub mod catalogue;
 #[cfg(feature = "formats")]
-pub mod fetched;
+mod fetched;
 #[cfg(feature = "formats")]
-pub mod load;
+pub mod formats;
 pub mod nave;
+#[cfg(feature = "formats")]
+mod shapes;
+
+pub use catalogue::available_scenes;
+#[cfg(feature = "formats")]
+pub use catalogue::{available_scenes_in, resolve, resolve_in};
+#[cfg(feature = "formats")]
+pub use fetched::SPONZA_SCALE;
+#[cfg(feature = "formats")]
+pub use formats::{load, load_with};
 
 use std::fmt;
 use std::path::PathBuf;
@@ -414,21 +425,3 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
-
-/// Names of the scenes usable now: the built-in ones always, the fetched ones
-/// (see `scripts/fetch-scenes.sh`) when their files are in the scene folder
-/// (`PBGI_SCENE_DIR`, else `scenes/` in the repository).
-pub fn available_scenes() -> Vec<String> {
-    #[cfg(feature = "formats")]
-    return available_scenes_in(&fetched::scene_dir());
-    #[cfg(not(feature = "formats"))]
-    builtin::NAMES.iter().map(|s| s.to_string()).collect()
-}
-
-/// As [`available_scenes`], with fetched scenes looked for in `dir`.
-#[cfg(feature = "formats")]
-pub fn available_scenes_in(dir: &std::path::Path) -> Vec<String> {
-    let mut names: Vec<String> = builtin::NAMES.iter().map(|s| s.to_string()).collect();
-    names.extend(fetched::available_in(dir));
-    names
-}

@@ -26,7 +26,10 @@ pub(crate) trait Kernel {
 /// ([`Isa::require`], [`Isa::best`]), so this is a check, not a path.
 #[inline(always)]
 pub(crate) fn dispatch<K: Kernel>(isa: Isa, kernel: K) -> K::Output {
-    assert!(isa.is_available(), "instruction set {isa} is not available on this CPU");
+    assert!(
+        isa.is_available(),
+        "instruction set {isa} is not available on this CPU"
+    );
     match isa {
         // SAFETY (each arm): the assertion above detected the clone's target
         // features on this CPU.

@@ -1,0 +1,82 @@
+//! What every format reader shares: errors naming file and line, reading
+//! regular files only, and a scene around a single mesh file.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::scene::{Camera, FovAxis, Material, Mesh, Scene, SceneError};
+
+pub(super) fn parse_err(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
+    SceneError::Parse {
+        path: path.to_path_buf(),
+        line,
+        message: message.into(),
+    }
+}
+
+/// Only regular files are read: a device (`/dev/zero`, a FIFO) named by a
+/// scene or linked to would be read forever.
+pub(super) fn regular_file(path: &Path) -> Result<(), SceneError> {
+    let io = |message: String| SceneError::Io {
+        path: path.to_path_buf(),
+        message,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(io("not a regular file".into()))
+    }
+}
+
+pub(super) fn read_text(path: &Path) -> Result<String, SceneError> {
+    regular_file(path)?;
+    std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+/// A scene of meshes from one file with a camera looking at them from +z.
+pub(super) fn single_file(
+    path: &Path,
+    (meshes, materials): (Vec<Mesh>, Vec<Material>),
+) -> Result<Scene, SceneError> {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for p in meshes.iter().flat_map(|m| &m.positions) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if meshes.iter().all(|m| m.triangles.is_empty()) {
+        return Err(parse_err(path, 0, "no triangles"));
+    }
+    let center = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element().max(1e-6);
+    Ok(Scene {
+        name: stem(path),
+        meshes,
+        materials,
+        lights: Vec::new(),
+        camera: Camera {
+            origin: center + Vec3::Z * (1.8 * size),
+            target: center,
+            up: Vec3::Y,
+            fov_degrees: 40.0,
+            fov_axis: FovAxis::Smaller,
+            width: 256,
+            height: 256,
+        },
+        warnings: vec![format!(
+            "{}: no camera in the file, a default camera looks at it from +z",
+            path.display()
+        )],
+    })
+}
+
+pub(super) fn stem(path: &Path) -> String {
+    path.file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_string()
+}

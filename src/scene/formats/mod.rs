@@ -1,0 +1,71 @@
+//! Scene files: a subset of Mitsuba 3 XML (large enough for real scenes), OBJ +
+//! MTL and PLY. Anything read but not supported is named in
+//! [`Scene::warnings`]; malformed input is a [`SceneError`] with file and line.
+//!
+//! Data enters as a path; it leaves as a validated [`Scene`]. One file per
+//! format (`mitsuba`, `obj`, `ply`), and `common` for what they share.
+
+mod common;
+mod mitsuba;
+mod obj;
+mod ply;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::Vec3;
+
+use common::single_file;
+use mitsuba::mitsuba;
+pub use obj::{MISSING_MTL_GREY, ObjFile, read_obj};
+pub use ply::read_ply;
+
+use super::{Material, Scene, SceneError};
+
+/// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`).
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with(path, &HashMap::new())
+}
+
+/// As [`load`], with Mitsuba `$name` parameters overriding the file's `<default>`s.
+pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene, SceneError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let scene = match ext.as_str() {
+        "xml" => mitsuba(path, params)?,
+        "obj" => {
+            let obj = read_obj(path)?;
+            let mut s = single_file(path, (obj.meshes, obj.materials))?;
+            s.warnings.extend(obj.warnings);
+            s
+        }
+        "ply" => {
+            let mesh = read_ply(path)?;
+            let mut warnings = vec![format!(
+                "{}: a bare mesh: default material and camera",
+                path.display()
+            )];
+            if mesh.emission.is_some() {
+                warnings.clear();
+            }
+            let mut s = single_file(
+                path,
+                (vec![mesh], vec![Material::diffuse("default", Vec3::splat(0.5))]),
+            )?;
+            s.warnings.append(&mut warnings);
+            s
+        }
+        _ => {
+            return Err(SceneError::Unsupported {
+                path: path.to_path_buf(),
+                line: 0,
+                what: format!("file type {ext:?} (expected .xml, .obj or .ply)"),
+            });
+        }
+    };
+    scene.validate()?;
+    Ok(scene)
+}

@@ -1,0 +1,243 @@
+//! OBJ meshes with their MTL materials (through tobj), checked before tobj
+//! sees them.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::common::{parse_err, read_text};
+use crate::scene::{Glossy, Material, Mesh, SceneError};
+
+/// Reads an OBJ with its MTL: one mesh per object; `Kd` is the albedo
+/// (clamped below 1, with a warning), `Ks`/`Ns` a glossy lobe, `Ke` emission.
+/// Files from the wild that write a light as `Ka` > 1 get that as emission (warned).
+pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
+    // tobj reports no line numbers: check the common faults first, with lines.
+    let text = read_text(path)?;
+    // Counts of v, vt and vn lines so far: every face index must refer to one
+    // (tobj's own checks miss some and then index out of bounds).
+    let mut counts = [0i64; 3];
+    // Material names in order of first use, for an OBJ whose MTL is missing.
+    let mut used_materials: Vec<String> = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("usemtl") => {
+                let name = line.trim_start()["usemtl".len()..].trim();
+                if !name.is_empty() && !used_materials.iter().any(|m| m == name) {
+                    used_materials.push(name.to_string());
+                }
+            }
+            Some(key @ ("v" | "vn" | "vt")) => {
+                let n = if key == "vt" { 2 } else { 3 };
+                let nums: Vec<_> = w.collect();
+                if nums.len() < n
+                    || nums
+                        .iter()
+                        .take(n)
+                        .any(|t| t.parse::<f32>().map_or(true, |x| !x.is_finite()))
+                {
+                    return Err(parse_err(path, i + 1, format!("bad {key} line {line:?}")));
+                }
+                counts[["v", "vt", "vn"].iter().position(|k| *k == key).unwrap_or(0)] += 1;
+            }
+            Some("f") => {
+                let idx: Vec<_> = w.collect();
+                if idx.len() < 3 {
+                    return Err(parse_err(path, i + 1, "a face needs three vertices"));
+                }
+                for t in idx {
+                    for (slot, part) in t.split('/').enumerate() {
+                        let (what, count) = match slot {
+                            0 => ("vertex", counts[0]),
+                            1 => ("texture coordinate", counts[1]),
+                            2 => ("normal", counts[2]),
+                            _ => {
+                                return Err(parse_err(
+                                    path,
+                                    i + 1,
+                                    format!("face index {t:?} has too many parts"),
+                                ));
+                            }
+                        };
+                        if slot > 0 && part.is_empty() {
+                            continue; // `v//vn` or `v/vt/`
+                        }
+                        match part.parse::<i64>() {
+                            Ok(k) if (k > 0 && k <= count) || (k < 0 && -k <= count) => {}
+                            _ => {
+                                return Err(parse_err(
+                                    path,
+                                    i + 1,
+                                    format!("face index {t:?}: {what} out of range ({count} so far)"),
+                                ));
+                            }
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    // The text already read; material libraries relative to the file,
+    // regular files only, and refused when tobj would panic on them. A
+    // missing, unreadable or refused MTL is not an error: the materials
+    // `usemtl` names get the default grey (and keep their names, so meshes
+    // stay apart by material).
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mtl_problems = std::cell::RefCell::new(Vec::<String>::new());
+    let load_mtl = |p: &Path| -> tobj::MTLLoadResult {
+        let file = dir.join(p);
+        let problem = match read_text(&file) {
+            Ok(text) if mtl_is_well_formed(&text) => return tobj::load_mtl_buf(&mut text.as_bytes()),
+            Ok(_) => format!("{}: a colour with fewer than three numbers", file.display()),
+            Err(e) => e.to_string(),
+        };
+        let mut problems = mtl_problems.borrow_mut();
+        let first = problems.is_empty();
+        problems.push(problem);
+        let names = if first { &used_materials[..] } else { &[] };
+        let stand_ins = names
+            .iter()
+            .map(|name| tobj::Material {
+                name: name.clone(),
+                diffuse: Some([MISSING_MTL_GREY; 3]),
+                ..Default::default()
+            })
+            .collect();
+        let map = names.iter().enumerate().map(|(k, n)| (n.clone(), k)).collect();
+        Ok((stand_ins, map))
+    };
+    let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, load_mtl)
+        .map_err(|e| parse_err(path, 0, e.to_string()))?;
+    let mut warnings: Vec<String> = mtl_problems
+        .into_inner()
+        .into_iter()
+        .map(|problem| {
+            format!(
+                "{}: material library not read ({problem}): the {} material(s) named by usemtl get the default grey {MISSING_MTL_GREY}",
+                path.display(),
+                used_materials.len()
+            )
+        })
+        .collect();
+    let mtl = mtl.unwrap_or_else(|e| {
+        warnings.push(format!(
+            "{}: materials not read ({e}), default grey used",
+            path.display()
+        ));
+        Vec::new()
+    });
+    let mut materials: Vec<Material> = Vec::new();
+    let mut emission = Vec::new();
+    for m in &mtl {
+        let kd = Vec3::from(m.diffuse.unwrap_or([0.5; 3]));
+        let mut albedo = kd;
+        if kd.max_element() >= 1.0 {
+            albedo = kd.min(Vec3::splat(0.99));
+            warnings.push(format!("material {}: Kd {kd} clamped below 1", m.name));
+        }
+        let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
+        let glossy = (ks.max_element() > 0.0).then(|| Glossy {
+            specular: ks.min(Vec3::splat(0.99)),
+            roughness: (2.0 / (m.shininess.unwrap_or(10.0).max(0.0) + 2.0)).sqrt(),
+        });
+        let ke = m.unknown_param.get("Ke").and_then(|s| parse_vec3(s));
+        let ka = Vec3::from(m.ambient.unwrap_or([0.0; 3]));
+        let e = match ke {
+            Some(e) if e.max_element() > 0.0 => Some(e),
+            _ if ka.max_element() > 1.0 => {
+                warnings.push(format!(
+                    "material {}: Ka {ka} > 1 taken as emitted radiance",
+                    m.name
+                ));
+                Some(ka)
+            }
+            _ => None,
+        };
+        emission.push(e);
+        materials.push(Material {
+            name: m.name.clone(),
+            albedo,
+            glossy,
+            bump: None,
+            two_sided: false,
+        });
+    }
+    materials.push(Material::diffuse("default", Vec3::splat(0.5)));
+    let default = materials.len() - 1;
+    let meshes = models
+        .into_iter()
+        .map(|m| {
+            let mesh = m.mesh;
+            let positions: Vec<Vec3> = mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect();
+            let normals =
+                (mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty()).then(|| {
+                    mesh.normals
+                        .chunks_exact(3)
+                        .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Z))
+                        .collect()
+                });
+            let material = mesh.material_id.filter(|&i| i < default).unwrap_or(default);
+            Mesh {
+                name: m.name,
+                positions,
+                triangles: mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+                normals,
+                material,
+                emission: emission.get(material).copied().flatten(),
+            }
+        })
+        .collect();
+    Ok(ObjFile {
+        meshes,
+        materials,
+        warnings,
+    })
+}
+
+/// tobj 4.0.5 panics on a colour line with fewer than three numbers
+/// (`Ks 0.5 0.5`); such a library is refused before it gets there.
+fn mtl_is_well_formed(text: &str) -> bool {
+    text.lines().all(|line| {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("Ka" | "Kd" | "Ks" | "Ke") => w.take(3).filter(|t| t.parse::<f32>().is_ok()).count() == 3,
+            _ => true,
+        }
+    })
+}
+
+/// Albedo of the materials an OBJ names by `usemtl` when its MTL file is missing.
+pub const MISSING_MTL_GREY: f32 = 0.5;
+
+/// What an OBJ file holds.
+pub struct ObjFile {
+    /// One mesh per object.
+    pub meshes: Vec<Mesh>,
+    /// Its materials, and a default grey last.
+    pub materials: Vec<Material>,
+    /// What was read but changed or not supported.
+    pub warnings: Vec<String>,
+}
+
+fn parse_vec3(s: &str) -> Option<Vec3> {
+    let v: Vec<f32> = s
+        .split_whitespace()
+        .map(|t| t.parse().ok())
+        .collect::<Option<_>>()?;
+    match v.as_slice() {
+        [x] => Some(Vec3::splat(*x)),
+        [x, y, z] => Some(Vec3::new(*x, *y, *z)),
+        _ => None,
+    }
+}
