@@ -9,12 +9,14 @@
 #                                   target/arm/.../pbgi, built by the ARM stage of
 #                                   .ci/run (not built here)
 #
-# Two families of clones, each compiled once per instruction set:
-#   traversal  run_{avx512,avx2,neon,portable} in src/cut/dispatch.rs (generic
-#              over the sink: every instance the binary holds is checked)
-#   shading    packet_* (the 16-lane splatting and convolution) and cuts_* (the
-#              scalar pipeline, which must not call out either) in
-#              src/microbuffer/lanes.rs
+# Three kernels, each compiled once per instruction set by the one dispatch
+# point, src/simd/dispatch.rs ({avx512,avx2,neon,portable}::<Kernel>):
+#   traversal       cut::run::Run (generic over the sink: every instance the
+#                   binary holds is checked)
+#   shading         microbuffer::shade::ShadePacket (the 16-lane splatting and
+#                   convolution)
+#   scalar-shading  microbuffer::shade::ShadeCuts (the scalar pipeline, which
+#                   must not call out either)
 # Everything a clone runs is inlined into it; a pbgi function it *calls*
 # instead is compiled for the baseline target (SSE2), whatever the clone's
 # features (TOOLCHAIN.md: measured 12x slower), so such calls fail the check,
@@ -47,9 +49,9 @@ esac
 # The symbol of clone `family` for `isa`, as it appears in the disassembly.
 symbol() {
     case "$1" in
-    traversal) echo "dispatch::run_$2::<" ;;
-    shading) echo "lanes::packet_$2>" ;;
-    scalar-shading) echo "lanes::cuts_$2>" ;;
+    traversal) echo "dispatch::$2::<pbgi::cut::run::Run<" ;;
+    shading) echo "dispatch::$2::<pbgi::microbuffer::shade::ShadePacket>" ;;
+    scalar-shading) echo "dispatch::$2::<pbgi::microbuffer::shade::ShadeCuts>" ;;
     esac
 }
 

@@ -2,7 +2,7 @@
 //! cut (sorted splats and discards) on every instruction-set path this CPU
 //! runs, for every hybrid threshold, on random and adversarial clouds
 //! (duplicates, sheets, lines, mixed scales, wild radii, lattices, extreme
-//! coordinates); the invariants of DESIGN §2 hold (checked independently of
+//! coordinates); the invariants of docs/design.md §2 hold (checked independently of
 //! `Cut::check`); the cut follows the node test (re-derived in f64) and never
 //! discards a visible disk; scaling the input by 2^k changes neither the
 //! tree nor the cut.

@@ -7,7 +7,7 @@
 //! value) and the energy bounds: irradiance per channel in `[0, π·max L]`,
 //! ambient occlusion in `[0, 1]` (`common::check_bounded`); and, where it
 //! traverses, that every scheme on every path this CPU runs gives the scalar
-//! cut and bitwise the scalar shading (DESIGN §4).
+//! cut and bitwise the scalar shading (docs/design.md §3).
 //!
 //! | case | test |
 //! | --- | --- |

@@ -1,5 +1,5 @@
 //! The node test (the paper's three masks), written once over a lane type
-//! ([`Real`]) so the scalar reference and the 16-lane kernels run the same
+//! (`Real`) so the scalar reference and the 16-lane kernels run the same
 //! IEEE operations in the same order. Only `+ - * sqrt` and comparisons: no
 //! FMA contraction, no reciprocal estimates, so every path classifies every
 //! node identically.

@@ -6,7 +6,7 @@ use crate::simd::{LANES, set_bits};
 use crate::tree::{NodeId, Tree};
 
 /// Receives the outcome of a traversal. `receiver` is the index of the
-/// receiver in the slice given to [`Traversal::run`].
+/// receiver in the slice given to [`Traversal::run`](super::Traversal::run).
 ///
 /// Every scheme reports the same set of calls, in its own order; a sink whose
 /// result must not depend on the scheme must therefore not depend on the order
@@ -54,7 +54,7 @@ pub struct Cut {
 }
 
 impl Cut {
-    /// Checks the cut invariants (DESIGN §2) against `tree`: splats and
+    /// Checks the cut invariants (docs/design.md §2) against `tree`: splats and
     /// discards partition the leaves (each leaf has exactly one
     /// ancestor-or-self among them), so none lies below another.
     pub fn check(&self, tree: &Tree) -> Result<(), String> {

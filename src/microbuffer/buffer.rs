@@ -151,7 +151,7 @@ impl MicroBuffer {
     }
 
     /// Rasterizes node `node` of `tree`, one node of this receiver's cut
-    /// (the scalar pipeline; [`shade_packet`] draws the same in 16 lanes).
+    /// (the scalar pipeline; [`shade_packet`](super::shade_packet) draws the same in 16 lanes).
     ///
     /// With `Ω = A·max(0, −n̄·ω)/d²` the node's projected solid angle (area
     /// `A`, mean normal `n̄`, direction `ω` and distance `d` of its centre):

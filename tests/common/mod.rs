@@ -603,7 +603,7 @@ impl Case {
 // ---------------------------------------------------------------------------
 // Independent checkers
 
-/// DESIGN §2's invariants, checked from the parent links (not with
+/// docs/design.md §2's invariants, checked from the parent links (not with
 /// `Cut::check`): ids in range, sorted, no duplicates, splats and discards
 /// disjoint; every leaf has exactly one splatted-or-discarded node on its path
 /// to the root; no splatted (or discarded) node has a marked strict ancestor.
@@ -695,7 +695,7 @@ pub fn surfels_below(tree: &Tree) -> Vec<Vec<u32>> {
     out
 }
 
-/// The node test of DESIGN §2 re-derived in f64 from the stored f32 node, with
+/// The node test of docs/design.md §2 re-derived in f64 from the stored f32 node, with
 /// tolerances for the kernels' f32 rounding: `Some(true)` when the f64 test
 /// clearly says yes, `Some(false)` clearly no, `None` within rounding.
 pub struct NodeTest64 {
@@ -1012,7 +1012,7 @@ pub fn shade(
 const LANES_PER_CHUNK: usize = 32;
 
 /// [`shade`] with every scheme on every path this CPU runs: all must give the
-/// scalar result of the portable path bit for bit (DESIGN §4). Returns it.
+/// scalar result of the portable path bit for bit (docs/design.md §3). Returns it.
 pub fn shade_everywhere(
     tree: &Tree,
     receivers: &[Receiver],

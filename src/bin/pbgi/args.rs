@@ -1,0 +1,227 @@
+//! The command line: subcommands and the one `Settings` they share.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use pbgi::render::RenderOptions;
+use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
+
+#[derive(Parser)]
+#[command(name = "pbgi", version, about = "Point-based global illumination renderer")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY file).
+    Render(RenderArgs),
+    /// Render the ground truth with the path tracer (same scene, camera, bounces).
+    Reference(ReferenceArgs),
+    /// The paper's Table 1: pre., trav. per scheme, others, speed-ups over scalar.
+    Bench(BenchArgs),
+    /// Error against run time: sweeps Ω, microbuffer and schemes against a path-traced reference.
+    Report(ReportArgs),
+    /// List the scene names: built-in, and fetched ones with whether their files are present.
+    Scenes,
+}
+
+#[derive(Args, Clone)]
+pub struct BenchArgs {
+    /// Scenes (built-in names or files); default: every scene available here.
+    pub scenes: Vec<String>,
+    /// One JSON object per (scene, scheme) on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Schemes to time (comma-separated; auto: the renderer's per-packet choice); the scalar reference always runs.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "scalar,single,packet,hybrid,auto"
+    )]
+    pub schemes: Vec<String>,
+    /// Rounds over the schemes; each time is the fastest of its rounds.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
+    /// Worker threads (default 1: the paper's per-core figures).
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Camera samples per pixel (each a receiver).
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+#[derive(Args, Clone)]
+pub struct ReportArgs {
+    /// Built-in scene or scene file.
+    #[arg(default_value = "cornell-box")]
+    pub scene: String,
+    /// The ground truth (.exr); default: OUT/reference.exr, path traced first if missing.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Paths per pixel of the reference when it is path traced here.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+    /// Output folder for error.csv, error.md, error.png, error.svg.
+    #[arg(long, default_value = "report")]
+    pub out: PathBuf,
+    /// Ω values to sweep (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0.3,0.1,0.05,0.02,0.01,0.005,0.002,0.001"
+    )]
+    pub max_solid_angles: Vec<f32>,
+    /// Microbuffer resolutions swept besides the default (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "8,16")]
+    pub microbuffers: Vec<usize>,
+    /// Schemes to time (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
+    pub schemes: Vec<String>,
+    /// Path tracer's spp sweep (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
+    pub path_tracer_spp: Vec<u32>,
+    /// Redraw error.png and error.svg from OUT/error.csv (a finished sweep) without rendering.
+    #[arg(long)]
+    pub replot: bool,
+    /// Leave out the Ω = 0 image (every leaf splatted; the slowest point).
+    #[arg(long)]
+    pub no_max_solid_angle_zero: bool,
+    /// Camera samples per pixel of the point-based images.
+    #[arg(long, default_value_t = RenderOptions::default().spp)]
+    pub spp: u32,
+    /// Light samples per receiver for direct light.
+    #[arg(long, default_value_t = 16)]
+    pub direct_samples: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+/// Point-based settings shared by `render`, `bench` and `report`: each
+/// option once, its default from [`RenderOptions::default`].
+#[derive(Args, Clone)]
+pub struct Settings {
+    /// Ω: largest solid angle (sr) of a splatted cluster.
+    #[arg(long, default_value_t = CutOptions::default().max_solid_angle)]
+    pub max_solid_angle: f32,
+    /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
+    #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
+    pub microbuffer: usize,
+    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
+    #[arg(long, default_value_t = RenderOptions::default().bounces)]
+    pub bounces: u32,
+    /// Surfels per unit area.
+    #[arg(long, default_value_t = RenderOptions::default().density)]
+    pub density: f32,
+    /// Hybrid: switch an entry to single below this many active lanes.
+    #[arg(long, default_value_t = CutOptions::default().hybrid_threshold)]
+    pub hybrid_threshold: u32,
+    /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
+    #[arg(long)]
+    pub isa: Option<String>,
+}
+
+impl Settings {
+    pub fn options(&self, spp: u32) -> Res<RenderOptions> {
+        Ok(RenderOptions {
+            cut: CutOptions {
+                max_solid_angle: self.max_solid_angle,
+                hybrid_threshold: self.hybrid_threshold,
+                isa: parse_isa(&self.isa)?,
+            },
+            microbuffer: self.microbuffer,
+            bounces: self.bounces,
+            spp,
+            density: self.density,
+            ..RenderOptions::default()
+        })
+    }
+}
+
+pub fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
+    names.iter().map(|n| Ok(n.trim().parse::<Scheme>()?)).collect()
+}
+
+/// Scheme names, `auto` included.
+pub fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
+    names.iter().map(|n| Ok(n.parse::<SchemeChoice>()?)).collect()
+}
+
+/// SCENE's help: the names (see `pbgi scenes` for which are present).
+const SCENE_HELP: &str = "Scene: built-in cornell-box, cornell-box-glossy, nave (procedural, stands in for Sibenik); \
+after scripts/fetch-scenes.sh also bunny, bunny-glossy, sponza, sponza-bump, cornell-box-embree \
+(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY file";
+
+#[derive(Args, Clone)]
+pub struct ReferenceArgs {
+    #[arg(default_value = "cornell-box", help = SCENE_HELP)]
+    pub scene: String,
+    /// Output image (.exr keeps linear radiance; .png is tonemapped). Default: SCENE-reference.exr.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Paths per pixel.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1 unlimited.
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    pub bounces: i32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+#[derive(Args, Clone)]
+pub struct RenderArgs {
+    #[arg(default_value = "cornell-box", help = SCENE_HELP)]
+    pub scene: String,
+    /// Output image: .png (tonemapped sRGB) or .exr (linear radiance). Default: SCENE.png.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Traversal scheme: auto, scalar, single, packet or hybrid.
+    #[arg(long, default_value = "auto")]
+    pub scheme: String,
+    /// Stratified camera samples per pixel (each a receiver); also direct-light samples.
+    #[arg(long, default_value_t = RenderOptions::default().spp)]
+    pub spp: u32,
+    /// Ambient occlusion instead of radiance.
+    #[arg(long)]
+    pub ao: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+impl Default for RenderArgs {
+    fn default() -> Self {
+        match Cli::parse_from(["pbgi", "render"]).command {
+            Some(Command::Render(a)) => a,
+            _ => unreachable!("`pbgi render` parses as the render command"),
+        }
+    }
+}
+
+pub type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+pub fn parse_isa(s: &Option<String>) -> Res<Option<Isa>> {
+    match s.as_deref().map(str::trim) {
+        None => Ok(None),
+        Some(s) if s.eq_ignore_ascii_case("auto") => Ok(Some(Isa::best())),
+        Some(s) => Ok(Some(s.parse::<Isa>()?.require()?)),
+    }
+}
+
+pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
+    Ok(RenderOptions {
+        scheme: a.scheme.parse()?,
+        ao: a.ao,
+        ..a.settings.options(a.spp)?
+    })
+}
