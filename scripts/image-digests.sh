@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Renders every built-in scene in a few modes and prints one SHA-256 per
-# image (of the linear EXR). `scripts/image-digests.sh --check` compares
-# with docs/image-digests.txt: a change that is meant to move no pixel (a
-# refactoring) must leave every line as it is; one that changes images
-# updates the file in the same commit and says why.
+# Renders every built-in scene in a few modes and prints the image digest of
+# each (`pbgi render` prints it: a hash of every pixel's bits, the same for
+# every scheme, instruction set and thread count). `--check` compares with
+# docs/image-digests.txt: a change meant to move no pixel (a refactoring)
+# leaves every line as it is; one that changes images updates the file in
+# the same commit and says why.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet --bin pbgi
@@ -22,8 +23,8 @@ cases=(
 out="$tmp/digests.txt"
 for c in "${cases[@]}"; do
     # shellcheck disable=SC2086
-    "$PBGI" render $c -o "$tmp/img.exr" > /dev/null 2>&1
-    printf '%s  %s\n' "$(sha256sum "$tmp/img.exr" | cut -c1-16)" "$c" >> "$out"
+    d=$("$PBGI" render $c -o "$tmp/img.exr" 2> /dev/null | sed -n 's/.*image digest \([0-9a-f]*\).*/\1/p')
+    printf '%s  %s\n' "${d:?no digest printed for $c}" "$c" >> "$out"
 done
 if [ "${1:-}" = "--check" ]; then
     diff -u docs/image-digests.txt "$out" && echo "image digests: all ${#cases[@]} unchanged"

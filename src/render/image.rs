@@ -2,6 +2,8 @@
 
 use glam::Vec3;
 
+use crate::rng::mix;
+
 /// A linear RGB image, row-major from the top-left corner.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -14,6 +16,19 @@ pub struct Image {
 }
 
 impl Image {
+    /// A 64-bit digest of the size and every pixel's bits: two renders gave
+    /// the same image, bit for bit, when their digests agree (every scheme,
+    /// instruction set and thread count gives the same one).
+    pub fn digest(&self) -> u64 {
+        let mut h = mix(u64::from(self.width) << 32 | u64::from(self.height));
+        for p in &self.pixels {
+            for c in p.to_array() {
+                h = mix(h ^ u64::from(c.to_bits()));
+            }
+        }
+        h
+    }
+
     /// 8-bit sRGB, clamped (no other tone mapping).
     pub fn to_srgb8(&self) -> Vec<u8> {
         let encode = |x: f32| {

@@ -94,7 +94,11 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
-    println!("wrote {}", out_path.display());
+    println!(
+        "wrote {} (image digest {:016x})",
+        out_path.display(),
+        out.image.digest()
+    );
     Ok(())
 }
 
@@ -172,12 +176,20 @@ fn write_image(img: &Image, path: &Path) -> Res<()> {
         .unwrap_or("")
         .to_ascii_lowercase();
     if ext == "exr" {
-        let (w, h) = (img.width as usize, img.height as usize);
-        exr::prelude::write_rgb_file(path, w, h, |x, y| {
-            let p = img.pixels[y * w + x];
+        use exr::prelude::*;
+        let w = img.width as usize;
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p: glam::Vec3 = img.pixels[y * w + x];
             (p.x, p.y, p.z)
-        })
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        });
+        // Blocks compressed one after the other, so they are written in line
+        // order: the parallel writer writes them as they finish, and the same
+        // pixels would make a different file from run to run.
+        exr::prelude::Image::from_channels((w, img.height as usize), channels)
+            .write()
+            .non_parallel()
+            .to_file(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
     } else {
         image::save_buffer(
             path,
