@@ -10,7 +10,7 @@ use glam::Vec3;
 use super::buffer::{MicroBuffer, key};
 use super::draw::write_pixel;
 use super::plan::{ConePlan, DiskPlan};
-use crate::simd::{F32s, LANES, M32s};
+use crate::simd::{F32s, LANES, M32s, set_bits};
 use crate::tree::NodeId;
 
 /// A pixel box is swept 16 pixels at a time in tiles of `w` columns by
@@ -155,14 +155,12 @@ impl MicroBuffer {
         for tile in Tiles::new(t.n, plan.bx.bounds()) {
             let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
             let (m, cover) = lanes.cover(wl, ux, uy, uz);
-            let mut hits = (m & tile.inside).to_bitmask();
+            let hits = (m & tile.inside).to_bitmask();
             if hits == 0 {
                 continue;
             }
             let cover = cover.to_array();
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
+            for k in set_bits(hits) {
                 let p = tile.pixel(k);
                 write_pixel(own, any, cov, p, key, cover[k], 0.5 <= cover[k]);
             }
@@ -182,15 +180,13 @@ impl MicroBuffer {
         for tile in Tiles::new(t.n, plan.bx.bounds()) {
             let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
             let (m, depth, cover) = lanes.hit(ux, uy, uz, tile.load(&t.pixel_size));
-            let mut hits = (m & tile.inside).to_bitmask();
+            let hits = (m & tile.inside).to_bitmask();
             if hits == 0 {
                 continue;
             }
             any_hit = true;
             let (depth, cover) = (depth.to_array(), cover.to_array());
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
+            for k in set_bits(hits) {
                 let p = tile.pixel(k);
                 write_pixel(own, any, cov, p, key(depth[k], node), cover[k], 0.5 <= cover[k]);
             }
