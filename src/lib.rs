@@ -73,8 +73,10 @@
 #![warn(missing_docs)]
 
 // Modules in data-flow order: the SIMD vocabulary and dispatch, the kernel
-// layer's data (errors, surfels, tree), cuts, the microbuffer; then, behind
-// the `render` feature, scenes, the renderer and the report.
+// layer's data (errors, surfels, tree), cuts, the microbuffer; inputs for
+// tests and benchmarks (random numbers, synthetic clouds, the closed-form
+// references); then, behind the `render` feature, scenes, the renderer and
+// the report.
 pub mod simd;
 
 pub mod error;
@@ -88,6 +90,8 @@ pub mod microbuffer;
 
 pub mod rng;
 pub mod synthetic;
+
+pub mod exact;
 
 #[cfg(feature = "render")]
 pub mod scene;
