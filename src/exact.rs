@@ -102,6 +102,9 @@ pub struct Probe {
     pub wo: Vec3,
     /// Which face it lies on.
     pub face: &'static str,
+    /// `"mid"` (at least 0.4 from every edge of its face), `"edge"` (within
+    /// 0.08 of one) or `"corner"` (within 0.08 of two).
+    pub class: &'static str,
 }
 
 impl Scene {
@@ -208,13 +211,14 @@ impl Scene {
         Ok(Tree::build(&PointCloud::new(self.surfels(per_cell, seed))?))
     }
 
-    /// Receivers on the floor, back wall, right wall and ceiling (16 each,
-    /// one packet per face): a 4×4 grid of face coordinates from 0.005 (a
-    /// corner, where two walls are seen edge-on) over mid-wall to near the
-    /// far edges, `offset` off the surface along the normal (the renderer
-    /// moves camera hits 10⁻⁵ of the scene size off their surface).
+    /// Receivers on the floor, back wall, right wall and ceiling (36 each):
+    /// a 6×6 grid of face coordinates from 0.005 (0.01 from the edge; in a
+    /// corner two walls are seen edge-on) over mid-wall to 0.96, `offset`
+    /// off the surface along the normal (the renderer moves camera hits
+    /// 10⁻⁵ of the scene size off their surface).
     pub fn probes(&self, offset: f32) -> Vec<Probe> {
-        let st = [0.005, 0.15, 0.55, 0.97];
+        let st = [0.005, 0.04, 0.2, 0.45, 0.7, 0.96];
+        let near = |x: f64| !(0.1..=0.9).contains(&x);
         let v = DVec3::new;
         let walls = [
             ("floor", v(-1.0, -1.0, -1.0), v(0.0, 0.0, 2.0), v(2.0, 0.0, 0.0)),
@@ -228,7 +232,8 @@ impl Scene {
             for &t in &st {
                 for &s in &st {
                     let p = (o + e1 * s + e2 * t).as_vec3() + n * offset;
-                    out.push(Probe { position: p, normal: n, wo: (-p).normalize(), face: name });
+                    let class = ["mid", "edge", "corner"][usize::from(near(s)) + usize::from(near(t))];
+                    out.push(Probe { position: p, normal: n, wo: (-p).normalize(), face: name, class });
                 }
             }
         }
