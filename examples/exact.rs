@@ -71,7 +71,10 @@ fn main() {
         }
         i += 2;
     }
-    let lobe = GlossyLobe { specular: Vec3::ONE, roughness: 0.3 };
+    let lobe = GlossyLobe {
+        specular: Vec3::ONE,
+        roughness: 0.3,
+    };
     let has = |w: &str| what.iter().any(|x| x == w);
     println!(
         "pipeline {}, surfels {}, receivers offset {offset}, glossy roughness {}; errors in % (rel. RMSE / mean bias)",
@@ -82,8 +85,14 @@ fn main() {
     for name in &scenes {
         let spec = match name.as_str() {
             "light" | "bounce" => RoomSpec::default(),
-            "open" => RoomSpec { open_ceiling: true, ..Default::default() },
-            "blocker" => RoomSpec { blocker: true, ..Default::default() },
+            "open" => RoomSpec {
+                open_ceiling: true,
+                ..Default::default()
+            },
+            "blocker" => RoomSpec {
+                blocker: true,
+                ..Default::default()
+            },
             other => panic!("unknown scene {other}"),
         };
         let mut scene = Scene::room(&spec);
@@ -98,7 +107,10 @@ fn main() {
         let exact: Vec<(f64, f64)> = probes.iter().map(|p| scene.exact(p.position, p.normal)).collect();
         let (e_irr, e_occ): (Vec<f64>, Vec<f64>) = exact.into_iter().unzip();
         let e_glossy: Vec<f64> = if has("glossy") {
-            probes.iter().map(|p| scene.glossy(p.position, p.normal, p.wo, &lobe, 500)).collect()
+            probes
+                .iter()
+                .map(|p| scene.glossy(p.position, p.normal, p.wo, &lobe, 500))
+                .collect()
         } else {
             Vec::new()
         };
@@ -120,7 +132,12 @@ fn main() {
             let count = scene.surfels(k, None).len();
             for &omega in &omegas {
                 for &n in &ns {
-                    let g = Gather { max_solid_angle: omega, resolution: n, lanes, scheme: Scheme::Packet };
+                    let g = Gather {
+                        max_solid_angle: omega,
+                        resolution: n,
+                        lanes,
+                        scheme: Scheme::Packet,
+                    };
                     let cell = |q: Quantity, exact: &[f64]| {
                         let (v, _) = gather(&tree, &probes, q, &g).expect("gather");
                         if dump {
@@ -128,13 +145,22 @@ fn main() {
                                 let x = p.position;
                                 println!(
                                     "    {:<8} ({:>6.3} {:>6.3} {:>6.3}) exact {e:>8.4} got {v:>8.4} {:>+7.2} %",
-                                    p.face, x.x, x.y, x.z, 100.0 * (v / e - 1.0)
+                                    p.face,
+                                    x.x,
+                                    x.y,
+                                    x.z,
+                                    100.0 * (v / e - 1.0)
                                 );
                             }
                         }
                         let s = stats(&v, exact);
                         let pick = |c: &str| -> (Vec<f64>, Vec<f64>) {
-                            probes.iter().zip(v.iter().zip(exact)).filter(|(p, _)| p.class == c).map(|(_, (a, b))| (*a, *b)).unzip()
+                            probes
+                                .iter()
+                                .zip(v.iter().zip(exact))
+                                .filter(|(p, _)| p.class == c)
+                                .map(|(_, (a, b))| (*a, *b))
+                                .unzip()
                         };
                         let (vm, em) = pick("mid");
                         let m = stats(&vm, &em);
@@ -146,9 +172,21 @@ fn main() {
                             100.0 * m.bias
                         )
                     };
-                    let irr = if has("irr") { cell(Quantity::Irradiance, &e_irr) } else { "-".into() };
-                    let occ = if has("occ") { cell(Quantity::Occlusion, &e_occ) } else { "-".into() };
-                    let glo = if has("glossy") { cell(Quantity::Glossy(lobe), &e_glossy) } else { "-".into() };
+                    let irr = if has("irr") {
+                        cell(Quantity::Irradiance, &e_irr)
+                    } else {
+                        "-".into()
+                    };
+                    let occ = if has("occ") {
+                        cell(Quantity::Occlusion, &e_occ)
+                    } else {
+                        "-".into()
+                    };
+                    let glo = if has("glossy") {
+                        cell(Quantity::Glossy(lobe), &e_glossy)
+                    } else {
+                        "-".into()
+                    };
                     let (irr, occ, glo) = (irr.as_str(), occ.as_str(), glo.as_str());
                     // Time: repeat the irradiance gather for at least `min_ms`.
                     let (mut runs, mut total) = (0usize, 0.0f64);
@@ -158,7 +196,9 @@ fn main() {
                         runs += 1;
                     }
                     let us = total * 1e6 / (runs * probes.len()) as f64;
-                    println!("{k:>3} {count:>7} {omega:>6} {n:>3} | {irr:>26} | {occ:>26} | {glo:>26} | {us:>8.1}");
+                    println!(
+                        "{k:>3} {count:>7} {omega:>6} {n:>3} | {irr:>26} | {occ:>26} | {glo:>26} | {us:>8.1}"
+                    );
                 }
             }
         }

@@ -21,7 +21,7 @@ use glam::{DVec3, Vec3};
 
 use crate::brdf::GlossyLobe;
 use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_packet};
-use crate::synthetic::Rng;
+use crate::rng::Rng;
 use crate::{CutOptions, Error, LANES, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 
 /// A rectangle `origin + s·e1 + t·e2` (`s, t ∈ [0, 1]`) cut into `cells[0]
@@ -46,9 +46,20 @@ pub struct Face {
 
 impl Face {
     fn new(origin: DVec3, e1: DVec3, e2: DVec3, cell: f64, blocker: bool) -> Face {
-        let cells = [(e1.length() / cell).round().max(1.0) as usize, (e2.length() / cell).round().max(1.0) as usize];
+        let cells = [
+            (e1.length() / cell).round().max(1.0) as usize,
+            (e2.length() / cell).round().max(1.0) as usize,
+        ];
         let count = cells[0] * cells[1];
-        Face { origin, e1, e2, cells, radiance: vec![Some(0.0); count], emitter: vec![false; count], blocker }
+        Face {
+            origin,
+            e1,
+            e2,
+            cells,
+            radiance: vec![Some(0.0); count],
+            emitter: vec![false; count],
+            blocker,
+        }
     }
 
     /// Unit normal, the side it emits to.
@@ -80,7 +91,12 @@ pub struct RoomSpec {
 
 impl Default for RoomSpec {
     fn default() -> Self {
-        RoomSpec { cells_per_unit: 8, light: 200.0, open_ceiling: false, blocker: false }
+        RoomSpec {
+            cells_per_unit: 8,
+            light: 200.0,
+            open_ceiling: false,
+            blocker: false,
+        }
     }
 }
 
@@ -157,7 +173,11 @@ impl Scene {
                     let m = (c[0] + c[2]) * 0.5;
                     // Smooth bounce light, varying per cell so that clusters average it.
                     let l = b * (1.0 + 0.3 * (2.1 * m.x + 1.3 * m.y + 0.7 * m.z + phase).sin());
-                    let light = !f.blocker && spec.light > 0.0 && (m.y - 1.0).abs() < 1e-9 && m.x.abs() < 0.125 && m.z.abs() < 0.125;
+                    let light = !f.blocker
+                        && spec.light > 0.0
+                        && (m.y - 1.0).abs() < 1e-9
+                        && m.x.abs() < 0.125
+                        && m.z.abs() < 0.125;
                     f.radiance[j * f.cells[0] + i] = Some(if light { spec.light } else { l });
                     f.emitter[j * f.cells[0] + i] = light;
                 }
@@ -193,13 +213,20 @@ impl Scene {
             let radius = (a.cross(b).length() / std::f64::consts::PI).sqrt() as f32;
             for j in 0..f.cells[1] * k {
                 for i in 0..f.cells[0] * k {
-                    let Some(l) = f.radiance[(j / k) * f.cells[0] + i / k] else { continue };
+                    let Some(l) = f.radiance[(j / k) * f.cells[0] + i / k] else {
+                        continue;
+                    };
                     let (u, v) = match seed {
                         Some(_) => (rng.f32() as f64, rng.f32() as f64),
                         None => (0.5, 0.5),
                     };
                     let p = f.origin + a * (i as f64 + u) + b * (j as f64 + v);
-                    out.push(Surfel { position: p.as_vec3(), normal: n, radius, radiance: Vec3::splat(l as f32) });
+                    out.push(Surfel {
+                        position: p.as_vec3(),
+                        normal: n,
+                        radius,
+                        radiance: Vec3::splat(l as f32),
+                    });
                 }
             }
         }
@@ -233,7 +260,13 @@ impl Scene {
                 for &s in &st {
                     let p = (o + e1 * s + e2 * t).as_vec3() + n * offset;
                     let class = ["mid", "edge", "corner"][usize::from(near(s)) + usize::from(near(t))];
-                    out.push(Probe { position: p, normal: n, wo: (-p).normalize(), face: name, class });
+                    out.push(Probe {
+                        position: p,
+                        normal: n,
+                        wo: (-p).normalize(),
+                        face: name,
+                        class,
+                    });
                 }
             }
         }
@@ -246,7 +279,11 @@ impl Scene {
         let (p, n) = (p.as_dvec3(), n.as_dvec3());
         // Cones (edge planes through p) of the slab faces p sees.
         let mut cones: Vec<[DVec3; 4]> = Vec::new();
-        for f in self.faces.iter().filter(|f| f.blocker && (p - f.origin).dot(f.normal()) > 1e-7) {
+        for f in self
+            .faces
+            .iter()
+            .filter(|f| f.blocker && (p - f.origin).dot(f.normal()) > 1e-7)
+        {
             let c = [f.origin, f.origin + f.e1, f.origin + f.e1 + f.e2, f.origin + f.e2].map(|q| q - p);
             let mid = (c[0] + c[2]) * 0.5;
             cones.push(std::array::from_fn(|k| {
@@ -261,7 +298,9 @@ impl Scene {
             }
             for j in 0..f.cells[1] {
                 for i in 0..f.cells[0] {
-                    let Some(l) = f.radiance[j * f.cells[0] + i] else { continue };
+                    let Some(l) = f.radiance[j * f.cells[0] + i] else {
+                        continue;
+                    };
                     let poly = clip(&f.cell(i, j).map(|q| q - p), n);
                     let mut w = psa(&poly, n);
                     if !f.blocker {
@@ -293,7 +332,10 @@ impl Scene {
                 continue;
             }
             let q = p + d * t - f.origin;
-            let (s, u) = (q.dot(f.e1) / f.e1.length_squared(), q.dot(f.e2) / f.e2.length_squared());
+            let (s, u) = (
+                q.dot(f.e1) / f.e1.length_squared(),
+                q.dot(f.e2) / f.e2.length_squared(),
+            );
             if !((0.0..1.0).contains(&s) && (0.0..1.0).contains(&u)) {
                 continue;
             }
@@ -307,7 +349,8 @@ impl Scene {
 
     /// Radiance seen from `p` along unit `d`; 0 where the ray leaves.
     pub fn radiance(&self, p: DVec3, d: DVec3) -> f64 {
-        self.hit(p, d).map_or(0.0, |(k, c, _)| self.faces[k].radiance[c].unwrap_or(0.0))
+        self.hit(p, d)
+            .map_or(0.0, |(k, c, _)| self.faces[k].radiance[c].unwrap_or(0.0))
     }
 
     /// Glossy reflection `∫ f_s(ωi, wo) L(ωi) cosθi dωi` of `lobe` at `p`
@@ -344,7 +387,9 @@ impl Scene {
             let (a, bb) = (f.e1 / f.cells[0] as f64, f.e2 / f.cells[1] as f64);
             let da = a.cross(bb).length() / (g * g) as f64;
             for (cell, l) in f.radiance.iter().enumerate() {
-                let (Some(l), true) = (l, f.emitter[cell]) else { continue };
+                let (Some(l), true) = (l, f.emitter[cell]) else {
+                    continue;
+                };
                 let o = f.origin + a * (cell % f.cells[0]) as f64 + bb * (cell / f.cells[0]) as f64;
                 for s in 0..g {
                     for u in 0..g {
@@ -429,8 +474,19 @@ pub struct Gather {
 
 /// Gathers `what` at every probe, on this thread; returns the values and
 /// the time taken (traversal, splatting and convolution).
-pub fn gather(tree: &Tree, probes: &[Probe], what: Quantity, g: &Gather) -> Result<(Vec<f64>, Duration), Error> {
-    let t = Traversal::new(tree, CutOptions { max_solid_angle: g.max_solid_angle, ..Default::default() })?;
+pub fn gather(
+    tree: &Tree,
+    probes: &[Probe],
+    what: Quantity,
+    g: &Gather,
+) -> Result<(Vec<f64>, Duration), Error> {
+    let t = Traversal::new(
+        tree,
+        CutOptions {
+            max_solid_angle: g.max_solid_angle,
+            ..Default::default()
+        },
+    )?;
     let receivers = Receiver::from_pairs(probes.iter().map(|p| (p.position, p.normal)))?;
     let mut bufs = vec![MicroBuffer::new(g.resolution)?; LANES];
     let mut cut = PacketCut::new(tree);
@@ -486,7 +542,11 @@ pub fn stats(gathered: &[f64], exact: &[f64]) -> Stats {
         }
     }
     let n = n.max(1) as f64;
-    Stats { rel_rmse: (s2 / n).sqrt(), bias: s1 / n, max }
+    Stats {
+        rel_rmse: (s2 / n).sqrt(),
+        bias: s1 / n,
+        max,
+    }
 }
 
 #[cfg(test)]
@@ -496,7 +556,10 @@ mod tests {
     #[test]
     fn a_closed_room_occludes_everything_and_an_open_one_the_sky_exactly() {
         let closed = Scene::room(&RoomSpec::default());
-        let open = Scene::room(&RoomSpec { open_ceiling: true, ..Default::default() });
+        let open = Scene::room(&RoomSpec {
+            open_ceiling: true,
+            ..Default::default()
+        });
         for p in closed.probes(2e-5) {
             let (_, occ) = closed.exact(p.position, p.normal);
             assert!((occ - 1.0).abs() < 1e-9, "{p:?}: {occ}");
@@ -509,27 +572,44 @@ mod tests {
         for i in 0..m {
             for j in 0..m {
                 // Cosine-weighted midpoint rule over the disk.
-                let (r, phi) = (((i as f64 + 0.5) / m as f64).sqrt(), std::f64::consts::TAU * (j as f64 + 0.5) / m as f64);
+                let (r, phi) = (
+                    ((i as f64 + 0.5) / m as f64).sqrt(),
+                    std::f64::consts::TAU * (j as f64 + 0.5) / m as f64,
+                );
                 let d = DVec3::new(r * phi.cos(), (1.0 - r * r).sqrt(), r * phi.sin());
                 let q = p.as_dvec3() + d * ((1.0 - p.y as f64) / d.y);
                 sky += f64::from(q.x.abs() < 1.0 && q.z.abs() < 1.0);
             }
         }
         let exact_sky = sky / (m * m) as f64;
-        assert!((1.0 - occ - exact_sky).abs() < 1e-3, "{} vs {exact_sky}", 1.0 - occ);
+        assert!(
+            (1.0 - occ - exact_sky).abs() < 1e-3,
+            "{} vs {exact_sky}",
+            1.0 - occ
+        );
     }
 
     #[test]
     fn lambert_matches_quadrature_with_and_without_the_blocker() {
         for blocker in [false, true] {
-            let s = Scene::room(&RoomSpec { blocker, ..Default::default() });
-            let flat = GlossyLobe { specular: glam::Vec3::ONE, roughness: 1.0 }; // e = 0: f·cos/pdf = 2 cos
+            let s = Scene::room(&RoomSpec {
+                blocker,
+                ..Default::default()
+            });
+            let flat = GlossyLobe {
+                specular: glam::Vec3::ONE,
+                roughness: 1.0,
+            }; // e = 0: f·cos/pdf = 2 cos
             for p in s.probes(2e-5).iter().step_by(5) {
                 let (e, _) = s.exact(p.position, p.normal);
                 // The flat lobe about the mirror direction of the normal is the
                 // uniform hemisphere: ∫ 2cosθ L dω / 2π·... = E/π.
                 let q = s.glossy(p.position, p.normal, p.normal, &flat, 600);
-                assert!((q * std::f64::consts::PI / e - 1.0).abs() < 5e-3, "blocker {blocker} {p:?}: {e} vs {}", q * std::f64::consts::PI);
+                assert!(
+                    (q * std::f64::consts::PI / e - 1.0).abs() < 5e-3,
+                    "blocker {blocker} {p:?}: {e} vs {}",
+                    q * std::f64::consts::PI
+                );
             }
         }
     }
