@@ -511,7 +511,7 @@ pub fn gather(
             t.run(g.scheme, chunk, &mut MicroBufferSink { tree, buffers: bufs });
             out.extend(bufs.iter().zip(pr).map(|(b, p)| match what {
                 Quantity::Irradiance => b.irradiance(tree).x as f64,
-                Quantity::Occlusion => b.occlusion() as f64,
+                Quantity::Occlusion => b.occlusion(tree) as f64,
                 Quantity::Glossy(lobe) => b.glossy(tree, p.wo, &lobe).x as f64,
             }));
         }

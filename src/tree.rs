@@ -317,6 +317,13 @@ impl Tree {
         &self.radiance
     }
 
+    /// Bounding-sphere radius of `node`.
+    #[inline(always)]
+    pub(crate) fn bounding_radius(&self, node: NodeId) -> f32 {
+        let (p, s) = NodeArrays::locate(node);
+        self.nodes.pairs.get(p).map_or(0.0, |pair| pair.f[field::R][s])
+    }
+
     /// Bounding-sphere centre and radius of `node`.
     #[inline]
     pub fn sphere(&self, node: NodeId) -> (Vec3, f32) {

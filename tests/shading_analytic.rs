@@ -299,7 +299,7 @@ fn occlusion_is_one_inside_a_closed_sphere_and_zero_outside_everything() {
             buffers: &mut mb,
         },
     );
-    assert!(mb[0].occlusion() > 0.9, "AO {}", mb[0].occlusion()); // measured 0.92
+    assert!(mb[0].occlusion(&tree) > 0.9, "AO {}", mb[0].occlusion(&tree)); // measured 0.92
     // Looking away from the sphere, from outside: nothing.
     let out = Receiver::new(Vec3::new(0.0, 3.0, 0.0), Vec3::Y).unwrap();
     let mut mb = vec![MicroBuffer::new(16).unwrap()];
@@ -312,7 +312,7 @@ fn occlusion_is_one_inside_a_closed_sphere_and_zero_outside_everything() {
             buffers: &mut mb,
         },
     );
-    assert_eq!(mb[0].occlusion(), 0.0);
+    assert_eq!(mb[0].occlusion(&tree), 0.0);
 }
 
 #[test]

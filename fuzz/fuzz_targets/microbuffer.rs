@@ -114,7 +114,7 @@ fuzz_target!(|input: Input| {
     let bound = lmax * std::f32::consts::PI * 1.0001 + Vec3::splat(f32::MIN_POSITIVE);
     assert!(e.is_finite() && e.min_element() >= 0.0, "irradiance {e}");
     assert!(!e.cmpgt(bound).any(), "irradiance {e} above π·max L = {bound}");
-    let ao = mb.occlusion();
+    let ao = mb.occlusion(&tree);
     assert!((0.0..=1.0).contains(&ao), "occlusion {ao}");
     // A lobe as a valid scene gives it (roughness in (0, 1]).
     let roughness = input.roughness.value(&[0.01, 0.1, 0.5, 1.0, 1e-3]);

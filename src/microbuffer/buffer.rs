@@ -1,29 +1,58 @@
-//! One receiver's raster: per pixel the nearest splats' keys and the summed
-//! coverage, and the convolutions that read it (the scalar pipeline's).
+//! One receiver's raster: the fragments its splats left (pixel, depth, node,
+//! coverage), and the convolutions that read it through `compose`.
 
 use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::compose;
 use super::locate::{FrameLanes, Located, NodeSplat, locate};
 use super::table::Table;
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
 use crate::error::Error;
-use crate::simd::{F32s, LANES, Real, sum};
+use crate::simd::{F32s, LANES};
 use crate::tree::{NodeId, SplatRecord, Tree};
 
-/// One unit of coverage in the fixed-point sums.
-pub(crate) const COVER_ONE: f32 = (1u32 << 24) as f32;
+/// The fragments of one receiver, one per (splat, pixel) it covers, as
+/// parallel arrays (of plain integers and floats: their growth code is not
+/// the crate's, so the kernels' clones call nothing of the crate's own).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Fragments {
+    /// Pixel index.
+    pub pixel: Vec<u32>,
+    /// `(depth, node)` ([`key`]).
+    pub key: Vec<u64>,
+    /// Fraction of the pixel covered (≥ 0; at most 1 but for a normalised
+    /// cone's scaled coverage).
+    pub cover: Vec<f32>,
+}
 
-/// Coverage sums saturate here (≥ one unit, so the clamp to one is
-/// unaffected): `min(a + b, CAP)` is associative for non-negative values,
-/// and a sum below the cap plus one unit fits in 32 bits.
-pub(crate) const COVER_CAP: u32 = 1 << 25;
+impl Fragments {
+    /// Adds a fragment if it covers anything.
+    #[inline(always)]
+    pub fn push(&mut self, pixel: usize, key: u64, cover: f32) {
+        if 0.0 < cover {
+            self.pixel.push(pixel as u32);
+            self.key.push(key);
+            self.cover.push(cover);
+        }
+    }
 
-/// No splat: larger than every key, and positive as an `i64` (keys compare
-/// as signed integers where the instruction set has no unsigned compare).
-pub(crate) const NO_KEY: u64 = i64::MAX as u64;
+    /// Number of fragments.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.pixel.len()
+    }
+
+    /// Forgets every fragment.
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        self.pixel.clear();
+        self.key.clear();
+        self.cover.clear();
+    }
+}
 
 /// `(depth, node)` as one integer ordered lexicographically: the bits of a
 /// non-negative, non-NaN `f32` order like its value.
@@ -41,7 +70,8 @@ pub(crate) fn key(depth: f32, node: NodeId) -> u64 {
 ///
 /// let mut mb = MicroBuffer::new(12)?;
 /// mb.reset(Vec3::ZERO, Vec3::Y);
-/// assert_eq!(mb.occlusion(), 0.0); // nothing splatted yet
+/// let tree = pbgi::Tree::build(&pbgi::PointCloud::default());
+/// assert_eq!(mb.occlusion(&tree), 0.0); // nothing splatted yet
 /// # Ok::<(), pbgi::Error>(())
 /// ```
 #[derive(Clone, Debug)]
@@ -50,12 +80,8 @@ pub struct MicroBuffer {
     pub(super) position: Vec3,
     /// Tangent frame: local x, y, z (= normal) in world space.
     pub(super) frame: [Vec3; 3],
-    /// Per pixel: the nearest `(depth, node)` among the splats that own it.
-    pub(super) own: Vec<u64>,
-    /// Per pixel: the nearest among all splats that touch it.
-    pub(super) any: Vec<u64>,
-    /// Per pixel: coverage in units of 2⁻²⁴, summed (saturating at [`COVER_CAP`]).
-    pub(super) cover: Vec<u32>,
+    /// What the splats left in the pixels.
+    pub(super) frags: Fragments,
 }
 
 impl MicroBuffer {
@@ -73,15 +99,11 @@ impl MicroBuffer {
                 expected: "1 to 256",
             });
         }
-        let table = Table::shared(n);
-        let len = table.cos_weight.len();
         Ok(Self {
-            table,
+            table: Table::shared(n),
             position: Vec3::ZERO,
             frame: [Vec3::X, Vec3::Y, Vec3::Z],
-            own: vec![NO_KEY; len],
-            any: vec![NO_KEY; len],
-            cover: vec![0; len],
+            frags: Fragments::default(),
         })
     }
 
@@ -106,9 +128,7 @@ impl MicroBuffer {
         let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
         self.position = position;
         self.frame = [t, bt, n];
-        self.own.fill(NO_KEY);
-        self.any.fill(NO_KEY);
-        self.cover.fill(0);
+        self.frags.clear();
     }
 
     #[inline]
@@ -157,17 +177,19 @@ impl MicroBuffer {
     /// `A`, mean normal `n̄`, direction `ω` and distance `d` of its centre):
     ///
     /// * a node smaller than the pixel `ω` falls in (`Ω < ΔΩ`) is spread over
-    ///   the 2×2 pixels around `ω` with bilinear weights, each covered by its
-    ///   weight times `Ω/ΔΩ`; it owns the pixel `ω` falls in;
-    /// * a larger leaf is drawn as its disk (radius inflated by 1.2) over the
-    ///   pixels whose centre ray hits its front; depth is the hit distance; a
-    ///   leaf covering no pixel centre (edge-on or between centres) is spread
-    ///   as above with `Ω` capped at the pixel's `ΔΩ`;
+    ///   the 2×2 pixels around `ω` with bilinear weights `w_k`, pixel `k`
+    ///   covered by `w_k·Ω·cosθ / ∫_k cos`: it adds exactly its projected
+    ///   solid angle (nothing when its centre is below the horizon);
+    /// * a larger leaf is drawn as its disk over the pixels whose centre ray
+    ///   hits its front; depth is the hit distance; a leaf covering no pixel
+    ///   centre (edge-on or between centres) is spread as above with `Ω`
+    ///   capped at the pixel's `ΔΩ`;
     /// * a larger cluster is drawn as a soft cone around `ω`: coverage 1 in
     ///   the middle, falling linearly across a rim as wide as the cone's
-    ///   radius (at least a pixel) and scaled so that it integrates to `Ω`.
+    ///   radius (at least a pixel); a cone whose centre is above the horizon
+    ///   is then scaled so that `Σ coverage·∫cos` is exactly `Ω·cosθ`.
     ///   Radii are chords `|u − ω|`, for which a cap's solid angle is exactly
-    ///   `π·chord²`. It owns the pixels it covers by at least one half.
+    ///   `π·chord²`.
     ///
     /// Depth is the distance to the centre except on disks. A node whose
     /// centre is the receiver's position has no direction and is skipped.
@@ -189,85 +211,44 @@ impl MicroBuffer {
         }
     }
 
-    /// The weight of pixel `p` in the convolution (`coverage·∫cosθ dω`, 0
-    /// when nothing touched it) and the node it shows (0 when none).
-    #[inline(always)]
-    fn weight(&self, p: usize) -> (f32, NodeId) {
-        let k = if self.own[p] != NO_KEY {
-            self.own[p]
-        } else {
-            self.any[p]
-        };
-        let valid = k != NO_KEY;
-        let cover = (self.cover[p] as f32 * (1.0 / COVER_ONE)).min_of(1.0);
-        let w = f32::select(valid, cover * self.table.cos_weight[p], 0.0);
-        (w, if valid { k as NodeId } else { 0 })
-    }
-
-    /// Irradiance: `Σ L·coverage·∫cosθ dω` over the pixels. The sum runs in
-    /// 16 interleaved partial sums (pixel `p` into sum `p mod 16`), added up
-    /// in order at the end: the order of the 16-lane convolution, so both
-    /// give the same bits.
+    /// Irradiance `E = ∫ L cosθ dω` (not `E/π`), from the composed pixels
+    /// (`compose`: the fragments sorted per pixel, layered by depth).
     pub fn irradiance(&self, tree: &Tree) -> Vec3 {
         self.irradiance_inline(tree)
     }
 
     /// [`irradiance`](Self::irradiance), inlined into the caller (a clone of
-    /// the scalar pipeline compiles it with its own instruction set).
+    /// a shading pipeline compiles it with its own instruction set).
     #[inline(always)]
     pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
-        let mut acc = [[0.0f32; LANES]; 3];
-        for p in 0..self.table.cos_weight.len() {
-            let (w, k) = self.weight(p);
-            // Node 0 stands for an empty pixel (weight 0); a tree without it is empty.
-            let l = tree
-                .radiance_slice()
-                .get(k as usize)
-                .copied()
-                .unwrap_or(Vec3::ZERO);
-            let lane = p % LANES;
-            acc[0][lane] += l.x * w;
-            acc[1][lane] += l.y * w;
-            acc[2][lane] += l.z * w;
-        }
-        Vec3::new(sum(acc[0]), sum(acc[1]), sum(acc[2]))
+        compose::irradiance(&self.table, &self.frags, tree)
     }
 
     /// Glossy reflection towards `wo` (world, unit):
-    /// `Σ L·coverage·f_s(ωi, ωo)·∫cosθ dω`, `ωi` the pixel centre, in pixel order.
+    /// `Σ L·f_s(ωi, ωo)·∫cosθ dω` over the composed pixels, `ωi` the pixel centre.
     pub fn glossy(&self, tree: &Tree, wo: Vec3, lobe: &GlossyLobe) -> Vec3 {
         let n = self.frame[2];
-        let mut l = Vec3::ZERO;
-        for p in 0..self.pixels() {
-            let (w, k) = self.weight(p);
-            if w > 0.0 {
-                let wi = self.to_world(self.table.dir[p]);
-                let radiance = tree
-                    .radiance_slice()
-                    .get(k as usize)
-                    .copied()
-                    .unwrap_or(Vec3::ZERO);
-                l += radiance * lobe.eval(n, wo, wi) * w;
-            }
-        }
-        l
+        compose::reflected(&self.table, &self.frags, tree, |p| {
+            lobe.eval(n, wo, self.to_world(self.table.dir[p]))
+        })
     }
 
     /// Ambient occlusion: the covered fraction of the cosine-weighted
-    /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1], summed like
-    /// [`irradiance`](Self::irradiance).
-    pub fn occlusion(&self) -> f32 {
-        self.occlusion_inline()
+    /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1] (`tree`: the depth
+    /// intervals of the splatted nodes, which layer the fragments).
+    pub fn occlusion(&self, tree: &Tree) -> f32 {
+        self.occlusion_inline(tree)
     }
 
     /// [`occlusion`](Self::occlusion), inlined into the caller.
     #[inline(always)]
-    pub(crate) fn occlusion_inline(&self) -> f32 {
-        let mut acc = [0.0f32; LANES];
-        for p in 0..self.table.cos_weight.len() {
-            acc[p % LANES] += self.weight(p).0;
-        }
-        (sum(acc) * std::f32::consts::FRAC_1_PI).min_of(1.0)
+    pub(crate) fn occlusion_inline(&self, tree: &Tree) -> f32 {
+        compose::occlusion(&self.table, &self.frags, tree)
+    }
+
+    /// Fragments left by the splats so far (for counters and tests).
+    pub fn fragments(&self) -> usize {
+        self.frags.len()
     }
 }
 

@@ -4,85 +4,66 @@
 
 use glam::Vec3;
 
-use super::buffer::{COVER_CAP, COVER_ONE, MicroBuffer, NO_KEY, key};
+use super::buffer::{Fragments, MicroBuffer, key};
 use super::locate::{Located, NodeSplat};
 use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
+use super::table::Table;
 use crate::simd::Real;
 use crate::tree::{NodeId, SplatRecord};
 
-/// [`MicroBuffer::write`] on the buffer's arrays (borrowed apart from its
-/// pixel table).
+/// Scales the cone fragments `frags[start..]` so that their
+/// `Σ coverage·∫cos` is `target` (`Ω·cosθ`); nothing when `target` is 0 (a
+/// centre below the horizon) or the cone covered no pixel. The sum is taken
+/// in fixed point, so it does not depend on the order the pixels were
+/// visited in (row by row here, tile by tile in the 16-lane draw).
 #[inline(always)]
-pub(super) fn write_pixel(
-    own: &mut [u64],
-    any: &mut [u64],
-    cover: &mut [u32],
-    p: usize,
-    key: u64,
-    coverage: f32,
-    owns: bool,
-) {
-    debug_assert!(coverage >= 0.0, "coverage {coverage}");
-    let c = (coverage.min_of(1.0) * COVER_ONE) as u32;
-    cover[p] = (cover[p] + c).min(COVER_CAP);
-    any[p] = any[p].min(key);
-    if owns {
-        own[p] = own[p].min(key);
+pub(super) fn normalize_cone(frags: &mut Fragments, start: usize, t: &Table, target: f32) {
+    if target.is_nan() || target <= 0.0 {
+        return;
+    }
+    const ONE: f64 = (1u64 << 40) as f64;
+    let mut sum = 0u64;
+    for i in start..frags.len() {
+        let cw = t.cos_weight[frags.pixel[i] as usize];
+        sum += ((frags.cover[i] * cw) as f64 * ONE) as u64;
+    }
+    if sum == 0 {
+        return;
+    }
+    let scale = target / (sum as f64 / ONE) as f32;
+    for c in &mut frags.cover[start..] {
+        *c = (*c * scale).min_of(1.0);
     }
 }
 
 impl MicroBuffer {
-    /// Adds a splat of `key` covering the fraction `coverage` ∈ [0, 1] of pixel `p`.
+    /// Draws a small splat.
     #[inline(always)]
-    fn write(&mut self, p: usize, key: u64, coverage: f32, owns: bool) {
-        write_pixel(
-            &mut self.own,
-            &mut self.any,
-            &mut self.cover,
-            p,
-            key,
-            coverage,
-            owns,
-        );
-    }
-
-    /// [`write`](Self::write) where `m`, else nothing, without a branch:
-    /// whether a corner gets weight is data the branch predictor cannot learn.
-    #[inline(always)]
-    fn write_if(&mut self, m: bool, p: usize, key: u64, coverage: f32, owns: bool) {
-        let c = (f32::select(m, coverage, 0.0).min_of(1.0) * COVER_ONE) as u32;
-        self.cover[p] = (self.cover[p] + c).min(COVER_CAP);
-        let key = if m { key } else { NO_KEY };
-        self.any[p] = self.any[p].min(key);
-        let own_key = if owns { key } else { NO_KEY };
-        self.own[p] = self.own[p].min(own_key);
-    }
-
-    /// Draws a small splat; it owns the pixel its centre falls in.
-    #[inline(always)]
-    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64, pixel: f32) {
+    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64) {
         for k in 0..4 {
-            let p = plan.p[k];
-            self.write_if(plan.w[k] > 0.0, p as usize, key, plan.cover[k], p == pixel);
+            let cover = f32::select(plan.w[k] > 0.0, plan.cover[k], 0.0).min_of(1.0);
+            self.frags.push(plan.p[k] as usize, key, cover);
         }
     }
 
-    /// Draws a cone around local direction `w`; it owns the pixels it covers
-    /// by at least one half.
+    /// Draws a cone around local direction `w`, normalised to `target`
+    /// ([`normalize_cone`]).
     #[inline(always)]
-    pub(crate) fn draw_cone(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
+    pub(crate) fn draw_cone(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64, target: f32) {
         let (c0, c1, r0, r1) = plan.bx.bounds();
         let n = self.table.n;
+        let start = self.frags.len();
         for r in r0..=r1 {
             for c in c0..=c1 {
                 let p = r * n + c;
                 let t = &self.table;
                 let (m, cover) = plan.cover([w.x, w.y, w.z], t.dir_x[p], t.dir_y[p], t.dir_z[p]);
                 if m {
-                    self.write(p, key, cover, 0.5 <= cover);
+                    self.frags.push(p, key, cover.min_of(1.0));
                 }
             }
         }
+        normalize_cone(&mut self.frags, start, &self.table, target);
     }
 
     /// Draws a leaf's disk (depth: the hit distance); false if it covers no
@@ -101,7 +82,7 @@ impl MicroBuffer {
                 let t = &self.table;
                 let (hit, depth, cover) = plan.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
                 if hit {
-                    self.write(p, key(depth, node), cover, 0.5 <= cover);
+                    self.frags.push(p, key(depth, node), cover.min_of(1.0));
                     any_hit = true;
                 }
             }
@@ -118,21 +99,25 @@ impl MicroBuffer {
         let visible = 0.0 < l.wz;
         let pixel_omega = f32::gather(&t.solid_angle, pixel);
         let key = key(l.d, node);
-        if visible && l.omega < pixel_omega {
-            let plan = plan_small(t, l.x, l.y, l.omega);
-            self.draw_small(&plan, key, pixel);
+        let cos = l.wz.max_of(0.0);
+        if l.omega < pixel_omega {
+            // Also below the horizon, where it adds nothing (cos 0): a cone
+            // there would put a pixel's worth at the horizon.
+            let plan = plan_small(t, l.x, l.y, l.omega * cos);
+            self.draw_small(&plan, key);
         } else if rec.leaf != 0 {
             let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
             // `Ω` is a far-field estimate that blows up for a disk nearly in
             // the receiver's plane: a leaf missing every centre gets a pixel at most.
             if !self.draw_disk(&plan, node) && visible {
                 let t = &*self.table;
-                let plan = plan_small(t, l.x, l.y, pixel_omega);
-                self.draw_small(&plan, key, pixel);
+                let plan = plan_small(t, l.x, l.y, pixel_omega * cos);
+                self.draw_small(&plan, key);
             }
         } else {
             let plan = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
-            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key);
+            let target = f32::select(visible, l.omega * cos, 0.0);
+            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key, target);
         }
     }
 }

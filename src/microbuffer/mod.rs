@@ -29,6 +29,7 @@
 //! (the two shading pipelines: [`shade_cuts`] and [`shade_packet`]).
 
 mod buffer;
+mod compose;
 mod draw;
 mod locate;
 mod plan;

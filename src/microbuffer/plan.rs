@@ -23,10 +23,6 @@ use super::locate::{FrameLanes, NodeSplat};
 use super::table::{NEAR, Table};
 use crate::simd::{F32s, M32s, Real};
 
-/// Leaf disks are rasterized this much larger than their radius, so that
-/// the disks of a surface overlap instead of leaving holes between them.
-const DISK_INFLATION: f32 = 1.2;
-
 /// Width of a cluster's coverage ramp, relative to its radius.
 const CONE_SOFTNESS: f32 = 1.0;
 
@@ -122,10 +118,22 @@ pub(crate) struct SmallPlan<V> {
     pub cover: [V; 4],
 }
 
-/// Spreads solid angle `omega` at `(x, y)` over the 2×2 pixels around it
-/// (bilinear weights between pixel centres, clamped into the grid).
+/// Coverage `w·Ω·cosθ / ∫cos` of one corner (none where `∫cos` is 0).
 #[inline(always)]
-pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega: V) -> SmallPlan<V> {
+fn share<V: Real>(w: V, omega_cos: V, cos_weight: V) -> V {
+    V::select(
+        V::splat(0.0).lt(cos_weight),
+        w * (omega_cos / cos_weight),
+        V::splat(0.0),
+    )
+}
+
+/// Spreads projected solid angle `omega_cos` (`Ω·cosθ`) at `(x, y)` over
+/// the 2×2 pixels around it (bilinear weights between pixel centres, clamped
+/// into the grid): pixel `k` is covered by `w_k·Ω·cosθ / ∫_k cos`, so the
+/// splat adds exactly its projected solid angle to the convolution.
+#[inline(always)]
+pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V) -> SmallPlan<V> {
     let (zero, half, one) = (V::splat(0.0), V::splat(0.5), V::splat(1.0));
     let (n, last) = (V::splat(t.n as f32), V::splat((t.n - 1) as f32));
     let (gx, gy) = (x - half, y - half);
@@ -137,12 +145,12 @@ pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega: V) -> SmallPlan<
     let w = [(one - tx) * (one - ty), tx * (one - ty), (one - tx) * ty, tx * ty];
     // Written out: a closure passed to `map` may be left out of line, and
     // then compiled for the baseline target rather than the caller's clone.
-    let sa = &t.solid_angle;
+    let cw = &t.cos_weight;
     let cover = [
-        w[0] * (omega / V::gather(sa, p[0])),
-        w[1] * (omega / V::gather(sa, p[1])),
-        w[2] * (omega / V::gather(sa, p[2])),
-        w[3] * (omega / V::gather(sa, p[3])),
+        share(w[0], omega_cos, V::gather(cw, p[0])),
+        share(w[1], omega_cos, V::gather(cw, p[1])),
+        share(w[2], omega_cos, V::gather(cw, p[2])),
+        share(w[3], omega_cos, V::gather(cw, p[3])),
     ];
     SmallPlan { p, w, cover }
 }
@@ -201,7 +209,7 @@ pub(crate) struct DiskPlan<V: Real> {
     pub bx: PixelBox<V>,
 }
 
-/// The disk of leaf `s` (radius inflated by [`DISK_INFLATION`]) seen from
+/// The disk of leaf `s` (area `A`, radius `√(A/π)`) seen from
 /// receiver `f`, its centre at `(x, y)` in pixel `pixel` and distance `d`.
 #[inline(always)]
 pub(crate) fn plan_disk<V: Real>(
@@ -213,7 +221,7 @@ pub(crate) fn plan_disk<V: Real>(
     pixel: V,
     d: V,
 ) -> DiskPlan<V> {
-    let r2 = s.area * V::splat(std::f32::consts::FRAC_1_PI) * V::splat(DISK_INFLATION * DISK_INFLATION);
+    let r2 = s.area * V::splat(std::f32::consts::FRAC_1_PI);
     let r = r2.sqrt();
     let m = [
         s.nx * f.tx + s.ny * f.ty + s.nz * f.tz,

@@ -13,17 +13,17 @@
 //! every instruction-set path like the traversal kernels, and run on the
 //! path they are given.
 
-use std::simd::{Select, prelude::*};
+use std::simd::prelude::*;
 
 use glam::Vec3;
 
-use super::buffer::{COVER_CAP, COVER_ONE, MicroBuffer, NO_KEY, key};
+use super::buffer::{MicroBuffer, key};
 use super::locate::{FrameLanes, NodeSplat, locate};
 use super::plan::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
 use super::table::Table;
 use crate::cut::CutSink;
 use crate::simd::dispatch::{Kernel, dispatch};
-use crate::simd::{F32s, Isa, LANES, Real, lane_mask, set_bits, sum};
+use crate::simd::{F32s, Isa, LANES, Real, lane_mask, set_bits};
 use crate::tree::{NodeId, Tree};
 
 /// A packet's cut, each node once with the lanes (receivers `0..16` of the
@@ -221,7 +221,7 @@ fn cuts_body(
         }
         *o = match what {
             Convolution::Irradiance => mb.irradiance_inline(tree),
-            Convolution::Occlusion => Vec3::splat(mb.occlusion_inline()),
+            Convolution::Occlusion => Vec3::splat(mb.occlusion_inline(tree)),
         };
     }
 }
@@ -270,7 +270,10 @@ fn packet_body(
         let pixel = pixel_of(t, l.x, l.y);
         let visible = zero.lt(l.wz);
         let pixel_omega = F32s::gather(&t.solid_angle, pixel);
-        let small_m = visible & l.omega.lt(pixel_omega);
+        // Sub-pixel nodes are small splats also below the horizon (where
+        // they add nothing), as in `MicroBuffer::apply`.
+        let small_m = l.omega.lt(pixel_omega);
+        let cos = l.wz.max_of(zero);
         let small = small_m.to_bitmask() as u16 & show;
         let large = show & !small;
         let leaf = rec.leaf != 0;
@@ -280,8 +283,8 @@ fn packet_body(
         // (An `if`, not `bool::then` with a closure: an out-of-line closure
         // would be compiled for the baseline target, not this clone.)
         let small_plan = if small != 0 || (leaf && large != 0) {
-            let plan = plan_small(t, l.x, l.y, F32s::select(small_m, l.omega, pixel_omega));
-            Some(SmallWrites::new(&plan, l.d, node, pixel))
+            let plan = plan_small(t, l.x, l.y, F32s::select(small_m, l.omega, pixel_omega) * cos);
+            Some(SmallWrites::new(&plan, l.d, node))
         } else {
             None
         };
@@ -317,6 +320,7 @@ fn packet_body(
             }
         } else {
             let cp = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
+            let target = F32s::select(visible, l.omega * cos, zero).to_array();
             let (a, inv_s) = (cp.a.to_array(), cp.inv_s.to_array());
             let (inner2, outer2, bx) = (cp.inner2.to_array(), cp.outer2.to_array(), boxes(&cp.bx));
             let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());
@@ -328,7 +332,7 @@ fn packet_body(
                     outer2: outer2[i],
                     bx: bx.lane(i),
                 };
-                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, key(d[i], node));
+                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, key(d[i], node), target[i]);
             }
         }
     }
@@ -337,40 +341,30 @@ fn packet_body(
     }
 }
 
-/// A small-splat plan of 16 lanes reduced to the pixel writes it makes:
-/// per corner and lane the pixel, the fixed-point coverage to add, and the
-/// keys to fold into `any` and `own` ([`NO_KEY`] where the corner has no
-/// weight or is not owned), all worked out in the lanes, so that each
-/// receiver's part is four plain read-modify-writes (the scalar pipeline's
-/// `write_if`, bit for bit).
+/// A small-splat plan of 16 lanes reduced to the fragments it leaves: per
+/// corner and lane the pixel, the key and the coverage (0 where the corner
+/// has no weight), all worked out in the lanes, so that each receiver's part
+/// is four appends (the scalar pipeline's `draw_small`, bit for bit).
 struct SmallWrites {
     p: [[u32; LANES]; 4],
-    cover: [[u32; LANES]; 4],
-    any: [[u64; LANES]; 4],
-    own: [[u64; LANES]; 4],
+    key: [u64; LANES],
+    cover: [[f32; LANES]; 4],
 }
 
 impl SmallWrites {
     #[inline(always)]
-    fn new(plan: &SmallPlan<F32s>, depth: F32s, node: NodeId, pixel: F32s) -> Self {
+    fn new(plan: &SmallPlan<F32s>, depth: F32s, node: NodeId) -> Self {
         let key = (depth.to_bits().cast::<u64>() << 32) | Simd::splat(u64::from(node));
-        let no_key = Simd::<u64, LANES>::splat(NO_KEY);
-        let (zero, one, unit) = (F32s::splat(0.0), F32s::splat(1.0), F32s::splat(COVER_ONE));
+        let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
         let mut w = SmallWrites {
             p: [[0; LANES]; 4],
-            cover: [[0; LANES]; 4],
-            any: [[NO_KEY; LANES]; 4],
-            own: [[NO_KEY; LANES]; 4],
+            key: key.to_array(),
+            cover: [[0.0; LANES]; 4],
         };
         for k in 0..4 {
             let m = zero.lt(plan.w[k]);
-            let c = F32s::select(m, plan.cover[k], zero).min_of(one) * unit;
-            let any = m.cast::<i64>().select(key, no_key);
-            let owns = plan.p[k].simd_eq(pixel).cast::<i64>();
             w.p[k] = plan.p[k].cast::<u32>().to_array();
-            w.cover[k] = c.cast::<u32>().to_array();
-            w.any[k] = any.to_array();
-            w.own[k] = owns.select(any, no_key).to_array();
+            w.cover[k] = F32s::select(m, plan.cover[k], zero).min_of(one).to_array();
         }
         w
     }
@@ -381,10 +375,7 @@ impl MicroBuffer {
     #[inline(always)]
     fn draw_small_lane(&mut self, sw: &SmallWrites, i: usize) {
         for k in 0..4 {
-            let p = sw.p[k][i] as usize;
-            self.cover[p] = (self.cover[p] + sw.cover[k][i]).min(COVER_CAP);
-            self.any[p] = self.any[p].min(sw.any[k][i]);
-            self.own[p] = self.own[p].min(sw.own[k][i]);
+            self.frags.push(sw.p[k][i] as usize, sw.key[i], sw.cover[k][i]);
         }
     }
 }
@@ -409,51 +400,12 @@ impl BoxLanes {
     }
 }
 
-/// [`MicroBuffer::irradiance`] (or occlusion) 16 pixels at a time, in the
-/// same order of operations.
+/// The convolution `what` of one buffer: the composition both pipelines
+/// share (`compose`).
 #[inline(always)]
 fn convolve(mb: &MicroBuffer, tree: &Tree, what: Convolution) -> Vec3 {
-    let table = &*mb.table;
-    let no_key = Simd::<u64, LANES>::splat(NO_KEY);
-    let low = Simd::<u64, LANES>::splat(0xFFFF_FFFF);
-    let inv_one = F32s::splat(1.0 / COVER_ONE);
-    let (one, zero) = (F32s::splat(1.0), F32s::splat(0.0));
-    let radiance = tree.radiance_slice();
-    let mut acc = [zero; 3];
-    for c in (0..table.cos_weight.len()).step_by(LANES) {
-        let own = Simd::<u64, LANES>::from_slice(&mb.own[c..c + LANES]);
-        let any = Simd::<u64, LANES>::from_slice(&mb.any[c..c + LANES]);
-        let key = own.simd_ne(no_key).select(own, any);
-        let valid = key.simd_ne(no_key);
-        let cover = Simd::<u32, LANES>::from_slice(&mb.cover[c..c + LANES]).cast::<f32>() * inv_one;
-        let cw = F32s::from_slice(&table.cos_weight[c..c + LANES]);
-        let w = F32s::select(valid.cast::<i32>(), cover.min_of(one) * cw, zero);
-        match what {
-            Convolution::Occlusion => acc[0] += w,
-            Convolution::Irradiance => {
-                let node = valid.select(key & low, Simd::splat(0)).cast::<usize>().to_array();
-                let mut l = [[0.0f32; LANES]; 3];
-                for (i, &k) in node.iter().enumerate() {
-                    // Node 0 stands for an empty pixel (weight 0); a tree without it is empty.
-                    let r = radiance.get(k).copied().unwrap_or(Vec3::ZERO);
-                    l[0][i] = r.x;
-                    l[1][i] = r.y;
-                    l[2][i] = r.z;
-                }
-                for (a, l) in acc.iter_mut().zip(l) {
-                    *a += F32s::from_array(l) * w;
-                }
-            }
-        }
-    }
     match what {
-        Convolution::Irradiance => Vec3::new(
-            sum(acc[0].to_array()),
-            sum(acc[1].to_array()),
-            sum(acc[2].to_array()),
-        ),
-        Convolution::Occlusion => {
-            Vec3::splat((sum(acc[0].to_array()) * std::f32::consts::FRAC_1_PI).min_of(1.0))
-        }
+        Convolution::Irradiance => mb.irradiance_inline(tree),
+        Convolution::Occlusion => Vec3::splat(mb.occlusion_inline(tree)),
     }
 }

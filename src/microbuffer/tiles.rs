@@ -8,9 +8,9 @@ use std::simd::simd_swizzle;
 use glam::Vec3;
 
 use super::buffer::{MicroBuffer, key};
-use super::draw::write_pixel;
+use super::draw::normalize_cone;
 use super::plan::{ConePlan, DiskPlan};
-use crate::simd::{F32s, LANES, M32s, set_bits};
+use crate::simd::{F32s, LANES, M32s, Real, set_bits};
 use crate::tree::NodeId;
 
 /// A pixel box is swept 16 pixels at a time in tiles of `w` columns by
@@ -149,8 +149,9 @@ impl MicroBuffer {
     /// [`draw_cone`](Self::draw_cone) 16 pixels at a time (the 16-lane
     /// pipeline): the same coverage of each pixel, bit for bit.
     #[inline(always)]
-    pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64) {
-        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
+    pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64, target: f32) {
+        let (t, frags) = (&*self.table, &mut self.frags);
+        let start = frags.len();
         let (lanes, wl) = (plan.splat(), [w.x, w.y, w.z].map(F32s::splat));
         for tile in Tiles::new(t.n, plan.bx.bounds()) {
             let (ux, uy, uz) = (tile.load(&t.dir_x), tile.load(&t.dir_y), tile.load(&t.dir_z));
@@ -161,10 +162,10 @@ impl MicroBuffer {
             }
             let cover = cover.to_array();
             for k in set_bits(hits) {
-                let p = tile.pixel(k);
-                write_pixel(own, any, cov, p, key, cover[k], 0.5 <= cover[k]);
+                frags.push(tile.pixel(k), key, cover[k].min_of(1.0));
             }
         }
+        normalize_cone(frags, start, t, target);
     }
 
     /// [`draw_disk`](Self::draw_disk) 16 pixels at a time (the 16-lane
@@ -174,7 +175,7 @@ impl MicroBuffer {
         if !plan.fronts {
             return false;
         }
-        let (t, own, any, cov) = (&*self.table, &mut self.own, &mut self.any, &mut self.cover);
+        let (t, frags) = (&*self.table, &mut self.frags);
         let lanes = plan.splat();
         let mut any_hit = false;
         for tile in Tiles::new(t.n, plan.bx.bounds()) {
@@ -187,8 +188,7 @@ impl MicroBuffer {
             any_hit = true;
             let (depth, cover) = (depth.to_array(), cover.to_array());
             for k in set_bits(hits) {
-                let p = tile.pixel(k);
-                write_pixel(own, any, cov, p, key(depth[k], node), cover[k], 0.5 <= cover[k]);
+                frags.push(tile.pixel(k), key(depth[k], node), cover[k].min_of(1.0));
             }
         }
         any_hit

@@ -4,8 +4,7 @@
 //! * [`LANES`], [`F32s`], [`M32s`] and the lane type `Real` (one `f32` or 16
 //!   of them, with the same IEEE operations), so each kernel is written once
 //!   and the scalar reference runs the same arithmetic as the lanes;
-//! * lane-mask helpers (`lane_mask`, `set_bits`) and the fixed-order
-//!   `sum` of 16 partial sums;
+//! * lane-mask helpers (`lane_mask`, `set_bits`);
 //! * [`Isa`] (`isa`): the instruction-set paths, their detection and
 //!   `PBGI_ISA`;
 //! * `dispatch`: one kernel trait and one `multiversion` dispatch, which
@@ -186,15 +185,4 @@ impl Iterator for SetBits {
         self.0 &= self.0 - 1;
         Some(i)
     }
-}
-
-/// `a[0] + a[1] + … + a[15]`, in that order: how the 16 partial sums of a
-/// convolution are added up, in both shading pipelines.
-#[inline(always)]
-pub(crate) fn sum(a: [f32; LANES]) -> f32 {
-    let mut s = 0.0;
-    for x in a {
-        s += x;
-    }
-    s
 }

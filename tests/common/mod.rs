@@ -1003,7 +1003,7 @@ pub fn shade(
                 buffers: &mut buffers,
             },
         );
-        out.extend(buffers.iter().map(|b| (b.irradiance(tree), b.occlusion())));
+        out.extend(buffers.iter().map(|b| (b.irradiance(tree), b.occlusion(tree))));
     }
     Ok(out)
 }

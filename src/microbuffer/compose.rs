@@ -1,0 +1,206 @@
+//! Composing a pixel from its fragments, and the convolutions that read the
+//! composed pixels: the one place both shading pipelines resolve a
+//! microbuffer, so they give the same bits by construction.
+//!
+//! A splat leaves one fragment in each pixel it touches: its depth, its node
+//! and the fraction of the pixel it covers. A pixel's fragments are sorted by
+//! `(depth − R, depth, node, coverage)`, `R` the node's bounding radius: a
+//! canonical order, so the composition depends on the set of splats only and
+//! plain `f32` sums are deterministic. The sorted fragments are swept into
+//! *layers* (runs whose depth intervals `[depth − R, depth + R]` overlap: one
+//! surface, seen through several splats); a layer adds its summed coverage
+//! and radiance unclamped (the disks of a surface tile it about once, so
+//! clamping each pixel at one would lose the overlaps and keep the gaps), and
+//! hides what lies behind it in proportion `κ·coverage` (opaque at half
+//! coverage: splats of a surface leave gaps that would let light leak
+//! through).
+//!
+//! Measured on the closed-form references (`pbgi::exact`, BENCHMARKS.md):
+//! this composition, with cos-exact small splats, normalised cones and
+//! uninflated disks, converges as Ω → 0 and is flat in N, where one owner's
+//! radiance per pixel with coverage clamped at one grew worse with both.
+
+use glam::Vec3;
+
+use super::buffer::Fragments;
+use super::table::Table;
+use crate::tree::Tree;
+
+/// How much of what lies behind a layer it hides per unit of coverage.
+const KAPPA: f32 = 2.0;
+
+/// A fragment in sort order: near depth, far depth, key `(depth, node)`,
+/// coverage.
+type Sorted = (f32, f32, u64, f32);
+
+/// `a` before `b` in the canonical order (a total order on every field).
+#[inline(always)]
+fn before(a: &Sorted, b: &Sorted) -> bool {
+    match a.0.total_cmp(&b.0) {
+        std::cmp::Ordering::Less => true,
+        std::cmp::Ordering::Greater => false,
+        std::cmp::Ordering::Equal => {
+            (a.2, a.3.to_bits(), a.1.to_bits()) < (b.2, b.3.to_bits(), b.1.to_bits())
+        }
+    }
+}
+
+/// Moves `v[root]` down the max-heap `v[..end]`.
+#[inline(always)]
+fn sift(v: &mut [Sorted], mut root: usize, end: usize) {
+    loop {
+        let mut child = 2 * root + 1;
+        if child >= end {
+            break;
+        }
+        if child + 1 < end && before(&v[child], &v[child + 1]) {
+            child += 1;
+        }
+        if !before(&v[root], &v[child]) {
+            break;
+        }
+        v.swap(root, child);
+        root = child;
+    }
+}
+
+/// Sorts a pixel's fragments: insertion sort for the usual handful, heap
+/// sort for long buckets (written out: a sort taking a closure would be
+/// compiled out of line, for the baseline target, not the kernel's clone).
+#[inline(always)]
+fn sort(v: &mut [Sorted]) {
+    if v.len() <= 32 {
+        for i in 1..v.len() {
+            let x = v[i];
+            let mut j = i;
+            while j > 0 && before(&x, &v[j - 1]) {
+                v[j] = v[j - 1];
+                j -= 1;
+            }
+            v[j] = x;
+        }
+        return;
+    }
+    let n = v.len();
+    for i in (0..n / 2).rev() {
+        sift(v, i, n);
+    }
+    for end in (1..n).rev() {
+        v.swap(0, end);
+        sift(v, 0, end);
+    }
+}
+
+/// The composed pixels of one receiver: per pixel the effective coverage
+/// and the radiance it lets through (`Σ layers T·Σ coverage·L`).
+pub(crate) struct Composed {
+    pub cover: Vec<f32>,
+    pub radiance: Vec<Vec3>,
+    /// The brightest radiance among the fragments, per channel.
+    pub brightest: Vec3,
+}
+
+/// Composes every pixel of `t` from `frags` (in any order). `radiance`:
+/// also sum the nodes' radiance (occlusion needs none).
+#[inline(always)]
+pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool) -> Composed {
+    let pixels = t.dir.len();
+    // Bucket by pixel (a counting sort: O(n)).
+    let mut start = vec![0u32; pixels + 1];
+    for &p in &frags.pixel {
+        start[p as usize + 1] += 1;
+    }
+    for p in 0..pixels {
+        start[p + 1] += start[p];
+    }
+    let mut next = start.clone();
+    let mut sorted: Vec<Sorted> = vec![(0.0, 0.0, 0, 0.0); frags.pixel.len()];
+    for i in 0..frags.pixel.len() {
+        let key = frags.key[i];
+        let depth = f32::from_bits((key >> 32) as u32);
+        let r = tree.bounding_radius((key & 0xFFFF_FFFF) as u32);
+        let slot = &mut next[frags.pixel[i] as usize];
+        sorted[*slot as usize] = (depth - r, depth + r, key, frags.cover[i]);
+        *slot += 1;
+    }
+    let radiances = tree.radiance_slice();
+    let mut out = Composed {
+        cover: vec![0.0; pixels],
+        radiance: vec![Vec3::ZERO; if radiance { pixels } else { 0 }],
+        brightest: Vec3::ZERO,
+    };
+    for p in 0..pixels {
+        let bucket = &mut sorted[start[p] as usize..start[p + 1] as usize];
+        if bucket.is_empty() {
+            continue;
+        }
+        sort(bucket);
+        // Sweep into layers: `t_pass` passes through the layers closed so
+        // far, `(c, l)` is what they showed, `(s, ls)` the open layer and
+        // `end` its far depth.
+        let (mut t_pass, mut c, mut l) = (1.0f32, 0.0f32, Vec3::ZERO);
+        let (mut s, mut ls, mut end) = (0.0f32, Vec3::ZERO, f32::NEG_INFINITY);
+        for &(near, far, key, cover) in bucket.iter() {
+            if near > end && s > 0.0 {
+                c += t_pass * s;
+                l += ls * t_pass;
+                t_pass *= (1.0 - KAPPA * s).max(0.0);
+                (s, ls) = (0.0, Vec3::ZERO);
+            }
+            end = end.max(far);
+            s += cover;
+            if radiance {
+                // Node 0 of an empty tree: nothing to show.
+                let r = radiances
+                    .get((key & 0xFFFF_FFFF) as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO);
+                ls += r * cover;
+                out.brightest = out.brightest.max(r);
+            }
+        }
+        out.cover[p] = c + t_pass * s;
+        if radiance {
+            out.radiance[p] = l + ls * t_pass;
+        }
+    }
+    out
+}
+/// Irradiance `Σ radiance·∫cos dω` over the pixels, in pixel order, at
+/// most `π` times the brightest radiance splatted: the unclamped layers of a
+/// receiver enclosed by surfaces whose splats overlap may cover a little
+/// more than the hemisphere, and where that radiance is uniform the exact
+/// answer is the bound itself.
+#[inline(always)]
+pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree) -> Vec3 {
+    let c = compose(t, frags, tree, true);
+    let mut e = Vec3::ZERO;
+    for (l, w) in c.radiance.iter().zip(&t.cos_weight) {
+        e += *l * *w;
+    }
+    e.min(c.brightest * std::f32::consts::PI)
+}
+
+/// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
+#[inline(always)]
+pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree) -> f32 {
+    let c = compose(t, frags, tree, false);
+    let mut o = 0.0f32;
+    for (c, w) in c.cover.iter().zip(&t.cos_weight) {
+        o += c * w;
+    }
+    (o * std::f32::consts::FRAC_1_PI).min(1.0)
+}
+
+/// `Σ radiance·f(ωi)·∫cos dω` with `f` evaluated at each pixel's centre
+/// direction (`wi(p)`, world space).
+pub(crate) fn reflected(t: &Table, frags: &Fragments, tree: &Tree, f: impl Fn(usize) -> Vec3) -> Vec3 {
+    let c = compose(t, frags, tree, true);
+    let mut e = Vec3::ZERO;
+    for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
+        if *l != Vec3::ZERO {
+            e += *l * f(p) * *w;
+        }
+    }
+    e
+}
