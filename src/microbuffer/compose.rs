@@ -29,20 +29,28 @@ use crate::tree::Tree;
 /// How much of what lies behind a layer it hides per unit of coverage.
 const KAPPA: f32 = 2.0;
 
-/// A fragment in sort order: near depth, far depth, key `(depth, node)`,
-/// coverage.
-type Sorted = (f32, f32, u64, f32);
+/// A fragment in sort order: `(near, node)` as one integer (the near depth's
+/// bits mapped to an unsigned order), the coverage's bits (equal keys are
+/// the same node twice in one pixel), the far depth.
+type Sorted = (u64, u32, f32);
 
-/// `a` before `b` in the canonical order (a total order on every field).
+/// `x`'s bits, ordered like `f32::total_cmp` orders `x`.
+#[inline(always)]
+fn ordered(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b >> 31 == 1 { !b } else { b | 0x8000_0000 }
+}
+
+/// The inverse of [`ordered`].
+#[inline(always)]
+fn unordered(o: u32) -> f32 {
+    f32::from_bits(if o >> 31 == 1 { o & 0x7FFF_FFFF } else { !o })
+}
+
+/// `a` before `b` in the canonical order (a total order on the fields).
 #[inline(always)]
 fn before(a: &Sorted, b: &Sorted) -> bool {
-    match a.0.total_cmp(&b.0) {
-        std::cmp::Ordering::Less => true,
-        std::cmp::Ordering::Greater => false,
-        std::cmp::Ordering::Equal => {
-            (a.2, a.3.to_bits(), a.1.to_bits()) < (b.2, b.3.to_bits(), b.1.to_bits())
-        }
-    }
+    (a.0, a.1) < (b.0, b.1)
 }
 
 /// Moves `v[root]` down the max-heap `v[..end]`.
@@ -64,12 +72,12 @@ fn sift(v: &mut [Sorted], mut root: usize, end: usize) {
     }
 }
 
-/// Sorts a pixel's fragments: insertion sort for the usual handful, heap
+/// Sorts a pixel's fragments: insertion sort for the usual few dozen, heap
 /// sort for long buckets (written out: a sort taking a closure would be
 /// compiled out of line, for the baseline target, not the kernel's clone).
 #[inline(always)]
 fn sort(v: &mut [Sorted]) {
-    if v.len() <= 32 {
+    if v.len() <= 48 {
         for i in 1..v.len() {
             let x = v[i];
             let mut j = i;
@@ -114,13 +122,18 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         start[p + 1] += start[p];
     }
     let mut next = start.clone();
-    let mut sorted: Vec<Sorted> = vec![(0.0, 0.0, 0, 0.0); frags.pixel.len()];
+    let mut sorted: Vec<Sorted> = vec![(0, 0, 0.0); frags.pixel.len()];
     for i in 0..frags.pixel.len() {
         let key = frags.key[i];
         let depth = f32::from_bits((key >> 32) as u32);
         let r = tree.bounding_radius((key & 0xFFFF_FFFF) as u32);
         let slot = &mut next[frags.pixel[i] as usize];
-        sorted[*slot as usize] = (depth - r, depth + r, key, frags.cover[i]);
+        let node = key & 0xFFFF_FFFF;
+        sorted[*slot as usize] = (
+            u64::from(ordered(depth - r)) << 32 | node,
+            frags.cover[i].to_bits(),
+            depth + r,
+        );
         *slot += 1;
     }
     let radiances = tree.radiance_slice();
@@ -140,7 +153,8 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         // `end` its far depth.
         let (mut t_pass, mut c, mut l) = (1.0f32, 0.0f32, Vec3::ZERO);
         let (mut s, mut ls, mut end) = (0.0f32, Vec3::ZERO, f32::NEG_INFINITY);
-        for &(near, far, key, cover) in bucket.iter() {
+        for &(near_node, cover, far) in bucket.iter() {
+            let (near, cover) = (unordered((near_node >> 32) as u32), f32::from_bits(cover));
             if near > end && s > 0.0 {
                 c += t_pass * s;
                 l += ls * t_pass;
@@ -152,7 +166,7 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
             if radiance {
                 // Node 0 of an empty tree: nothing to show.
                 let r = radiances
-                    .get((key & 0xFFFF_FFFF) as usize)
+                    .get((near_node & 0xFFFF_FFFF) as usize)
                     .copied()
                     .unwrap_or(Vec3::ZERO);
                 ls += r * cover;

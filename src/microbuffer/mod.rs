@@ -12,21 +12,22 @@
 //! the horizon are about 3× larger in solid angle than near the normal, where
 //! the cosine weight is largest.
 //!
-//! **Order independence** (docs/design.md, "Determinism"): each pixel keeps the lexicographic
-//! minimum of `(depth, node)` (whose radiance it shows) and the sum of the
-//! coverages splatted into it in fixed point (integer addition is
-//! associative), and every sum over pixels runs in a fixed order; so the
-//! shading depends on the set of splats only, not on the order a traversal
-//! scheme reports them in. Summing coverage keeps the energy of many clusters
-//! smaller than a pixel that share it; the sum is clamped to one.
-
+//! **Composition** (docs/design.md §3): a splat leaves a fragment (depth,
+//! node, coverage) in each pixel it touches; `compose` sorts each pixel's
+//! fragments into a canonical order (by depth interval, node and
+//! coverage), sweeps them into depth layers and convolves, so the shading
+//! depends on the set of splats only, not on the order a traversal scheme
+//! reports them in, and both pipelines share one composition.
+//!
 //! Data enters as a receiver (position, normal: [`MicroBuffer::reset`]) and
 //! its cut (node ids of a [`Tree`](crate::Tree)); it leaves as irradiance,
 //! occlusion or glossy radiance. The files, in data-flow order: `table`
 //! (the map and its per-pixel tables), `locate` (where a node falls),
-//! `buffer` (the raster and its convolutions), `plan` (a splat's class and
-//! footprint), `draw` (the scalar draw), `tiles` (the 16-lane draw), `shade`
-//! (the two shading pipelines: [`shade_cuts`] and [`shade_packet`]).
+//! `buffer` (the fragments and the convolutions' entry points), `compose`
+//! (fragments to pixels, pixels to irradiance, occlusion or glossy), `plan`
+//! (a splat's class and footprint), `draw` (the scalar draw), `tiles` (the
+//! 16-lane draw), `shade` (the two shading pipelines: [`shade_cuts`] and
+//! [`shade_packet`]).
 
 mod buffer;
 mod compose;
