@@ -146,11 +146,14 @@ fn inside_a_uniform_sphere_irradiance_is_pi_l() {
     let recs = Receiver::from_pairs(pairs).unwrap();
     for res in [8, 16] {
         for e in irradiance(&tree, &recs, 0.02, res, Scheme::Packet, Isa::best()) {
-            // Tolerance 10 %: the per-pixel coverage clamp drops the overlap of
-            // neighbouring splats (measured: about 3 % low at N 8, 9 % at N 16).
+            // Tolerance 1 %: the composed coverage of a closed enclosure
+            // exceeds the hemisphere a little (overlapping splats add
+            // unclamped within a layer), and irradiance is bounded by π·max L,
+            // which is the exact answer here. The convergence of the estimate
+            // itself is asserted on rooms of varying radiance (tests/exact.rs).
             let err = rel(e.x, std::f32::consts::PI * L);
             assert!(
-                err < 0.10,
+                err < 0.01,
                 "N {res}: E = {} vs πL = {}",
                 e.x,
                 std::f32::consts::PI * L
@@ -166,7 +169,7 @@ fn facing_a_large_plane_irradiance_is_pi_l() {
     let recs = Receiver::from_pairs([(Vec3::new(0.1, 0.2, 0.5), -Vec3::Z)]).unwrap();
     let e = irradiance(&tree, &recs, 0.02, 16, Scheme::Hybrid, Isa::best())[0].x;
     let expect = std::f32::consts::PI * L * (1.0 - 0.25 / (0.25 + 400.0));
-    assert!(rel(e, expect) < 0.05, "E = {e} vs {expect}"); // tolerance 5 %
+    assert!(rel(e, expect) < 0.005, "E = {e} vs {expect}"); // tolerance 0.5 % (measured 0.06 %)
 }
 
 #[test]
@@ -194,7 +197,7 @@ fn on_the_axis_of_a_disk() {
         let recs = Receiver::from_pairs([(Vec3::new(0.0, 0.0, d), -Vec3::Z)]).unwrap();
         let e = irradiance(&tree, &recs, 0.01, 32, Scheme::Single, Isa::best())[0].x;
         let expect = std::f32::consts::PI * L * r * r / (r * r + d * d);
-        assert!(rel(e, expect) < 0.10, "r {r} d {d}: E = {e} vs {expect}"); // tolerance 10 % (measured ≤ 7 %)
+        assert!(rel(e, expect) < 0.01, "r {r} d {d}: E = {e} vs {expect}"); // tolerance 1 % (measured ≤ 0.26 %)
     }
 }
 
