@@ -21,6 +21,7 @@ use glam::{DVec3, Vec3};
 
 use crate::brdf::GlossyLobe;
 use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_packet};
+use crate::polygon::{clip, projected_solid_angle};
 use crate::rng::Rng;
 use crate::{CutOptions, Error, LANES, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 
@@ -301,15 +302,15 @@ impl Scene {
                     let Some(l) = f.radiance[j * f.cells[0] + i] else {
                         continue;
                     };
-                    let poly = clip(&f.cell(i, j).map(|q| q - p), n);
-                    let mut w = psa(&poly, n);
+                    let poly = clip(&f.cell(i, j).map(|q| q - p), |q| n.dot(q));
+                    let mut w = projected_solid_angle(&poly, n);
                     if !f.blocker {
                         for cone in &cones {
                             let mut part = poly.clone();
                             for m in cone {
-                                part = clip(&part, *m);
+                                part = clip(&part, |q| m.dot(q));
                             }
-                            w -= psa(&part, n);
+                            w -= projected_solid_angle(&part, n);
                         }
                     }
                     e += l * w;
@@ -409,42 +410,6 @@ impl Scene {
         }
         glossy
     }
-}
-
-/// Clips the convex polygon `poly` to `a·q ≥ 0` (Sutherland–Hodgman).
-fn clip(poly: &[DVec3], a: DVec3) -> Vec<DVec3> {
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for i in 0..poly.len() {
-        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
-        let (dp, dq) = (a.dot(p), a.dot(q));
-        if dp >= 0.0 {
-            out.push(p);
-        }
-        if (dp >= 0.0) != (dq >= 0.0) {
-            out.push(p + (q - p) * (dp / (dp - dq)));
-        }
-    }
-    out
-}
-
-/// Projected solid angle `∫ cosθ dω` (θ from `n`) of the convex polygon
-/// `poly` (relative to the receiver, above its tangent plane): Lambert's
-/// formula `½ |Σ θᵢ γᵢ·n|`, θᵢ the angle an edge subtends and γᵢ the unit
-/// normal of the plane through it and the receiver.
-fn psa(poly: &[DVec3], n: DVec3) -> f64 {
-    if poly.len() < 3 {
-        return 0.0;
-    }
-    let mut sum = 0.0;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let c = a.cross(b);
-        let len = c.length();
-        if len > 0.0 {
-            sum += len.atan2(a.dot(b)) * c.dot(n) / len;
-        }
-    }
-    (0.5 * sum).abs()
 }
 
 /// What a gather computes.

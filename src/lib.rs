@@ -87,6 +87,7 @@ pub mod cut;
 
 pub mod brdf;
 pub mod microbuffer;
+mod polygon;
 
 pub mod rng;
 pub mod synthetic;

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::compose;
+pub(crate) use super::fragments::Fragments;
 use super::locate::{FrameLanes, Located, NodeSplat, locate};
 use super::table::Table;
 use crate::brdf::GlossyLobe;
@@ -13,46 +14,6 @@ use crate::cut::CutSink;
 use crate::error::Error;
 use crate::simd::{F32s, LANES};
 use crate::tree::{NodeId, SplatRecord, Tree};
-
-/// The fragments of one receiver, one per (splat, pixel) it covers, as
-/// parallel arrays (of plain integers and floats: their growth code is not
-/// the crate's, so the kernels' clones call nothing of the crate's own).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Fragments {
-    /// Pixel index.
-    pub pixel: Vec<u32>,
-    /// `(depth, node)` ([`key`]).
-    pub key: Vec<u64>,
-    /// Fraction of the pixel covered (≥ 0; at most 1 but for a normalised
-    /// cone's scaled coverage).
-    pub cover: Vec<f32>,
-}
-
-impl Fragments {
-    /// Adds a fragment if it covers anything.
-    #[inline(always)]
-    pub fn push(&mut self, pixel: usize, key: u64, cover: f32) {
-        if 0.0 < cover {
-            self.pixel.push(pixel as u32);
-            self.key.push(key);
-            self.cover.push(cover);
-        }
-    }
-
-    /// Number of fragments.
-    #[inline(always)]
-    pub fn len(&self) -> usize {
-        self.pixel.len()
-    }
-
-    /// Forgets every fragment.
-    #[inline(always)]
-    pub fn clear(&mut self) {
-        self.pixel.clear();
-        self.key.clear();
-        self.cover.clear();
-    }
-}
 
 /// `(depth, node)` as one integer ordered lexicographically: the bits of a
 /// non-negative, non-NaN `f32` order like its value.

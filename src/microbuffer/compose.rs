@@ -22,7 +22,7 @@
 
 use glam::Vec3;
 
-use super::buffer::Fragments;
+use super::fragments::Fragments;
 use super::table::Table;
 use crate::tree::Tree;
 

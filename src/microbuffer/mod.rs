@@ -23,7 +23,8 @@
 //! its cut (node ids of a [`Tree`](crate::Tree)); it leaves as irradiance,
 //! occlusion or glossy radiance. The files, in data-flow order: `table`
 //! (the map and its per-pixel tables), `locate` (where a node falls),
-//! `buffer` (the fragments and the convolutions' entry points), `compose`
+//! `fragments` (what a splat leaves in a pixel), `buffer` (a receiver's
+//! fragments and the convolutions' entry points), `compose`
 //! (fragments to pixels, pixels to irradiance, occlusion or glossy), `plan`
 //! (a splat's class and footprint), `draw` (the scalar draw), `tiles` (the
 //! 16-lane draw), `shade` (the two shading pipelines: [`shade_cuts`] and
@@ -32,6 +33,7 @@
 mod buffer;
 mod compose;
 mod draw;
+mod fragments;
 mod locate;
 mod plan;
 mod shade;

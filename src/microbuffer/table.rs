@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::{DVec2, DVec3, Vec3};
 
+use crate::polygon::{clip, projected_solid_angle};
 use crate::simd::LANES;
 
 /// Local unit direction of the point `(u, v)` of the square.
@@ -30,38 +31,6 @@ fn triangle_solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     2.0 * num.atan2(den)
 }
 
-/// `∫ cosθ dω` (θ from +z) over the convex polygon `poly` seen from the
-/// origin, by Lambert's formula: `½ Σ θᵢ (γᵢ · z)`, θᵢ the angle an edge
-/// subtends and γᵢ the unit normal of the plane through it and the origin.
-fn polygon_projected_solid_angle(poly: &[DVec3]) -> f64 {
-    let mut sum = 0.0;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let c = a.cross(b);
-        let len = c.length();
-        if len > 0.0 {
-            sum += len.atan2(a.dot(b)) * c.z / len;
-        }
-    }
-    (0.5 * sum).abs()
-}
-
-/// Clips the convex polygon `poly` (in the `(px, py)` plane) to `a·p ≥ 0`.
-fn clip(poly: &[DVec2], a: DVec2) -> Vec<DVec2> {
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for i in 0..poly.len() {
-        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
-        let (dp, dq) = (a.dot(p), a.dot(q));
-        if dp >= 0.0 {
-            out.push(p);
-        }
-        if (dp >= 0.0) != (dq >= 0.0) {
-            out.push(p + (q - p) * (dp / (dp - dq)));
-        }
-    }
-    out
-}
-
 /// Exact solid angle and `∫ cosθ dω` of the pixel `[u0, u1] × [v0, v1]`:
 /// per quadrant of the diamond the pixel is a planar polygon on a face of
 /// the octahedron `|x| + |y| + z = 1`.
@@ -70,7 +39,8 @@ pub(crate) fn pixel_integrals(u0: f64, u1: f64, v0: f64, v1: f64) -> (f64, f64) 
     let square = [to_p(u0, v0), to_p(u1, v0), to_p(u1, v1), to_p(u0, v1)];
     let (mut omega, mut projected) = (0.0, 0.0);
     for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
-        let part = clip(&clip(&square, DVec2::new(sx, 0.0)), DVec2::new(0.0, sy));
+        let (ax, ay) = (DVec2::new(sx, 0.0), DVec2::new(0.0, sy));
+        let part = clip(&clip(&square, |p| ax.dot(p)), |p| ay.dot(p));
         if part.len() < 3 {
             continue;
         }
@@ -81,7 +51,7 @@ pub(crate) fn pixel_integrals(u0: f64, u1: f64, v0: f64, v1: f64) -> (f64, f64) 
         for i in 1..lifted.len() - 1 {
             omega += triangle_solid_angle(lifted[0], lifted[i], lifted[i + 1]);
         }
-        projected += polygon_projected_solid_angle(&lifted);
+        projected += projected_solid_angle(&lifted, DVec3::Z);
     }
     (omega, projected)
 }
