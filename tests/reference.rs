@@ -34,6 +34,7 @@ fn error_falls_like_one_over_sqrt_spp() {
                 spp,
                 bounces: 1,
                 seed,
+                ..Default::default()
             },
             &|_, _| {},
         )
@@ -108,6 +109,7 @@ fn floor_under_a_glowing_ceiling() {
             spp: 256,
             bounces: 0,
             seed: 5,
+            ..Default::default()
         },
         &|_, _| {},
     )
@@ -147,6 +149,7 @@ fn point_based_and_path_traced_cornell_boxes_agree() {
             spp: 1024,
             bounces: 1,
             seed: 9,
+            ..Default::default()
         },
         &|_, _| {},
     )
@@ -181,4 +184,59 @@ fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
     let broken = text.replacen("pbgi,packet", "pbgi,warp", 1);
     let err = pbgi::report::from_csv(&broken).unwrap_err();
     assert!(err.starts_with("line 2: unknown scheme"), "{err}");
+}
+
+/// The direct and indirect parts add up to the whole, in both renderers
+/// (same seeds: the same samples, split by the bounces they took).
+#[test]
+fn direct_and_indirect_parts_add_up_to_the_image() {
+    use pbgi::render::Component;
+    let scene = small_box();
+    let ptr = |component| {
+        let o = ReferenceOptions {
+            spp: 16,
+            component,
+            ..Default::default()
+        };
+        render_reference(&scene, &o, &|_, _| {}).unwrap().image
+    };
+    let pb = |component| {
+        let o = RenderOptions {
+            spp: 2,
+            component,
+            ..Default::default()
+        };
+        render(&scene, &o, &|_, _| {}).unwrap().image
+    };
+    for (name, parts) in [
+        (
+            "path tracer",
+            [
+                ptr(Component::All),
+                ptr(Component::Direct),
+                ptr(Component::Indirect),
+            ],
+        ),
+        (
+            "point-based",
+            [pb(Component::All), pb(Component::Direct), pb(Component::Indirect)],
+        ),
+    ] {
+        let [all, direct, indirect] = parts;
+        let (mut indirect_sum, mut direct_sum) = (0.0f64, 0.0f64);
+        for ((a, d), i) in all.pixels.iter().zip(&direct.pixels).zip(&indirect.pixels) {
+            let sum = *d + *i;
+            assert!(
+                (*a - sum).abs().max_element() <= 1e-5 * a.max_element().max(1.0),
+                "{name}: all {a} against direct {d} + indirect {i}"
+            );
+            indirect_sum += i.element_sum() as f64;
+            direct_sum += d.element_sum() as f64;
+        }
+        // Both parts are there: the box's indirect light is about a third of its direct.
+        assert!(
+            indirect_sum > 0.1 * direct_sum,
+            "{name}: indirect {indirect_sum}, direct {direct_sum}"
+        );
+    }
 }

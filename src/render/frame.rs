@@ -12,7 +12,7 @@ use super::bake::{BakeOptions, bake};
 use super::bounces::gather_bounce;
 use super::image::Image;
 use super::light::Lights;
-use super::options::RenderOptions;
+use super::options::{Component, RenderOptions};
 use super::output::{RenderError, RenderOutput, Stage, Timings};
 use super::packets::PacketCuts;
 use super::shading::{ShadingPoint, shading_point};
@@ -334,7 +334,11 @@ impl<'s> Frame<'s> {
                         acc_others.add(t2.elapsed().as_secs_f64());
                     }
                     for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {
-                        sums[pp.pixel] += *d + *l;
+                        sums[pp.pixel] += match opts.component {
+                            Component::All => *d + *l,
+                            Component::Direct => *d,
+                            Component::Indirect => *l,
+                        };
                     }
                 }
                 let out = pixels

@@ -2,6 +2,58 @@
 
 use crate::cut::{CutOptions, SchemeChoice};
 
+/// Which light an image holds: the indirect part alone is what the gather
+/// computes, and what its error is measured on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Component {
+    /// Emission, direct and indirect light.
+    #[default]
+    All,
+    /// Emission seen from the camera and light that reaches the first hit
+    /// straight from an emitter.
+    Direct,
+    /// Light that reflects off at least one more surface before the first
+    /// hit: the point-based gather, or the path tracer's longer paths.
+    Indirect,
+}
+
+impl Component {
+    /// Whether light that bounced `bounces` times before the first hit is in.
+    pub fn holds(self, bounces: u32) -> bool {
+        match self {
+            Component::All => true,
+            Component::Direct => bounces == 0,
+            Component::Indirect => bounces > 0,
+        }
+    }
+}
+
+impl std::fmt::Display for Component {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Component::All => "all",
+            Component::Direct => "direct",
+            Component::Indirect => "indirect",
+        })
+    }
+}
+
+impl std::str::FromStr for Component {
+    type Err = crate::error::Error;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "all" => Ok(Component::All),
+            "direct" => Ok(Component::Direct),
+            "indirect" => Ok(Component::Indirect),
+            _ => Err(crate::error::Error::InvalidParameter {
+                name: "component",
+                value: s.into(),
+                expected: "all, direct or indirect",
+            }),
+        }
+    }
+}
+
 /// Render settings; the defaults render the Cornell box in about a second.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
@@ -23,6 +75,8 @@ pub struct RenderOptions {
     pub density: f32,
     /// Area-light samples per surfel.
     pub surfel_light_samples: u32,
+    /// Which light the image holds.
+    pub component: Component,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -39,6 +93,7 @@ impl Default for RenderOptions {
             ao: false,
             density: 2000.0,
             surfel_light_samples: 16,
+            component: Component::All,
             seed: 1,
         }
     }

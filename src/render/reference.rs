@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use super::image::Image;
 use super::light::Lights;
+use super::options::Component;
 use super::output::RenderError;
 use super::shading::shading_point;
 use super::trace::Tracer;
@@ -27,6 +28,8 @@ pub struct ReferenceOptions {
     pub spp: u32,
     /// Indirect bounces: 0 direct only, 1 one bounce (Mitsuba `max_depth` 3), −1 unlimited.
     pub bounces: i32,
+    /// Which light the image holds (as [`RenderOptions::component`](super::RenderOptions)).
+    pub component: Component,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -36,6 +39,7 @@ impl Default for ReferenceOptions {
         Self {
             spp: 256,
             bounces: 1,
+            component: Component::All,
             seed: 7,
         }
     }
@@ -160,6 +164,7 @@ pub fn render_reference(
                             cam.origin,
                             cam.ray_direction(fx, fy),
                             opts.bounces,
+                            opts.component,
                             &mut rng,
                         );
                         if l.is_finite() {
@@ -184,7 +189,10 @@ pub fn render_reference(
     })
 }
 
-/// Radiance along one camera path.
+/// Radiance along one camera path: the light of `component` (light that
+/// reaches vertex `k` from an emitter has bounced `k` times before the first
+/// hit, so an emitter hit at vertex `k + 1` by the BSDF sample counts `k`).
+#[allow(clippy::too_many_arguments)]
 fn trace_path(
     scene: &Scene,
     tracer: &Tracer,
@@ -192,6 +200,7 @@ fn trace_path(
     origin: Vec3,
     dir: Vec3,
     bounces: i32,
+    component: Component,
     rng: &mut Rng,
 ) -> Vec3 {
     let mut radiance = Vec3::ZERO;
@@ -199,14 +208,14 @@ fn trace_path(
     let (mut origin, mut dir) = (origin, dir);
     // Solid-angle pdf of the BSDF sample that made this ray; None for the camera ray.
     let mut prev_pdf: Option<f32> = None;
-    let mut depth = 0; // surface vertices so far
+    let mut depth = 0u32; // surface vertices so far
     let max_vertices = if bounces < 0 { u32::MAX } else { bounces as u32 + 1 };
     while let Some(hit) = tracer.closest(origin, dir, f32::INFINITY) {
         let Some(sp) = shading_point(scene, tracer, origin, dir, &hit) else {
             break;
         };
         // Emission: seen directly, or reached by a BSDF sample (MIS with NEE).
-        if sp.emitted.max_element() > 0.0 {
+        if sp.emitted.max_element() > 0.0 && component.holds(depth.saturating_sub(1)) {
             let w = match prev_pdf {
                 None => 1.0,
                 Some(pb) => {
@@ -227,6 +236,7 @@ fn trace_path(
         };
         let (p, n, wo) = (sp.position, sp.normal, sp.wo);
         // Next-event estimation: one area-light sample (MIS), every delta light.
+        let nee = component.holds(depth - 1);
         if let Some((q, ln, le)) = lights.sample_area(rng.f32(), rng.f32(), rng.f32()) {
             let d = q - p;
             let dist2 = d.length_squared();
@@ -235,7 +245,8 @@ fn trace_path(
                 let wi = d / dist;
                 let cos_l = -ln.dot(wi);
                 let f = bsdf.eval(n, wo, wi);
-                if cos_l > 0.0 && f.max_element() > 0.0 && !tracer.occluded(p, wi, dist * (1.0 - 1e-4)) {
+                if nee && cos_l > 0.0 && f.max_element() > 0.0 && !tracer.occluded(p, wi, dist * (1.0 - 1e-4))
+                {
                     let pl = lights.area_pdf(dist2, cos_l);
                     let w = power_heuristic(pl, bsdf.pdf(n, wo, wi));
                     radiance += throughput * f * le * (n.dot(wi) * w / pl);
@@ -258,7 +269,7 @@ fn trace_path(
                 } => (-direction, irradiance, f32::INFINITY),
             };
             let cos = n.dot(wi);
-            if cos > 0.0 && !tracer.occluded(p, wi, dist) {
+            if nee && cos > 0.0 && !tracer.occluded(p, wi, dist) {
                 radiance += throughput * bsdf.eval(n, wo, wi) * li * cos;
             }
         }

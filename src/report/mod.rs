@@ -53,9 +53,23 @@ pub fn emitter_mask(scene: &Scene) -> Vec<bool> {
         .collect()
 }
 
-/// Relative RMSE of `image` against `reference` over the pixels not in
-/// `mask`: `sqrt(Σ‖I − R‖² / Σ‖R‖²)`, in f64.
-pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<f64, RenderError> {
+/// An image measured against a reference over the pixels that see no emitter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Comparison {
+    /// `sqrt(Σ‖I − R‖² / Σ‖R‖²)`.
+    pub rel_rmse: f64,
+    /// `Σ(I − R) / ΣR` over the channels: the mean's relative error.
+    pub bias: f64,
+    /// Mean of the image over the pixels and channels compared.
+    pub mean: f64,
+    /// Mean of the reference over the same.
+    pub reference_mean: f64,
+    /// Pixels compared.
+    pub pixels: usize,
+}
+
+/// `image` against `reference` over the pixels not in `mask`, in f64.
+pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Comparison, RenderError> {
     if (image.width, image.height) != (reference.width, reference.height) || mask.len() != image.pixels.len()
     {
         return Err(RenderError::Check(format!(
@@ -67,7 +81,7 @@ pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<
             mask.len()
         )));
     }
-    let (mut err, mut norm) = (0.0f64, 0.0f64);
+    let (mut err, mut norm, mut sum, mut sum_ref, mut pixels) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
     for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
         if skip {
             continue;
@@ -75,14 +89,60 @@ pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<
         let (a, b) = (a.as_dvec3(), b.as_dvec3());
         err += (a - b).length_squared();
         norm += b.length_squared();
+        sum += a.element_sum();
+        sum_ref += b.element_sum();
+        pixels += 1;
     }
-    if norm > 0.0 {
-        Ok((err / norm).sqrt())
+    if norm > 0.0 && sum_ref != 0.0 {
+        let n = 3.0 * pixels as f64;
+        Ok(Comparison {
+            rel_rmse: (err / norm).sqrt(),
+            bias: (sum - sum_ref) / sum_ref,
+            mean: sum / n,
+            reference_mean: sum_ref / n,
+            pixels,
+        })
     } else {
         Err(RenderError::Check(
             "the reference is black outside the emitters".into(),
         ))
     }
+}
+
+/// Relative RMSE of `image` against `reference` over the pixels not in
+/// `mask`: `sqrt(Σ‖I − R‖² / Σ‖R‖²)`, in f64.
+pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<f64, RenderError> {
+    Ok(compare(image, reference, mask)?.rel_rmse)
+}
+
+/// The signed error `I − R` (luminance-like mean of the channels) as 8-bit
+/// RGB: red where the image is too bright, blue where too dark, saturated at
+/// ±25 % of the reference's mean; pixels in `mask` grey. Same sizes as
+/// [`compare`] checks.
+pub fn error_image(image: &Image, reference: &Image, mask: &[bool]) -> Vec<u8> {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (b, &skip) in reference.pixels.iter().zip(mask) {
+        if !skip {
+            sum += f64::from(b.element_sum()) / 3.0;
+            n += 1;
+        }
+    }
+    let scale = if n > 0 && sum > 0.0 {
+        0.25 * sum / n as f64
+    } else {
+        1.0
+    };
+    let mut out = Vec::with_capacity(image.pixels.len() * 3);
+    for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
+        if skip {
+            out.extend([96, 96, 96]);
+            continue;
+        }
+        let e = (f64::from((*a - *b).element_sum()) / 3.0 / scale).clamp(-1.0, 1.0);
+        let v = (255.0 * (1.0 - e.abs())) as u8;
+        out.extend(if e >= 0.0 { [255, v, v] } else { [v, v, 255] });
+    }
+    out
 }
 
 /// How an image of the sweep was made.
@@ -258,6 +318,7 @@ pub fn error_sweep(
             bounces: opts.bounces as i32,
             // Not the reference's own seed: its noise must not cancel.
             seed: 0x5EED_0000 + spp as u64,
+            ..Default::default()
         };
         let out = render_reference(scene, &ro, &|_, _| {})?;
         points.push(ErrorPoint {

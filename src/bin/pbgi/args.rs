@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use pbgi::render::RenderOptions;
+use pbgi::render::{ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
@@ -21,6 +21,8 @@ pub enum Command {
     Reference(ReferenceArgs),
     /// The paper's Table 1: pre., trav. per scheme, others, speed-ups over scalar.
     Bench(BenchArgs),
+    /// Relative RMSE and bias of an image against a reference, emitters left out.
+    Compare(CompareArgs),
     /// Error against run time: sweeps Ω, microbuffer and schemes against a path-traced reference.
     Report(ReportArgs),
     /// List the scene names: built-in, and fetched ones with whether their files are present.
@@ -171,9 +173,29 @@ pub struct ReferenceArgs {
     /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1 unlimited.
     #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub bounces: i32,
+    /// Which light the image holds: all, direct, or indirect (what the gather computes).
+    #[arg(long, default_value = "all")]
+    pub component: String,
+    /// Seed of every random choice (two seeds give independent images: their difference is the noise).
+    #[arg(long, default_value_t = ReferenceOptions::default().seed)]
+    pub seed: u64,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+#[derive(Args, Clone)]
+pub struct CompareArgs {
+    /// The image to measure (.exr).
+    pub image: PathBuf,
+    /// The ground truth (.exr), e.g. from `pbgi reference`.
+    pub reference: PathBuf,
+    /// The scene both show: pixels that see its emitters are left out of the error.
+    #[arg(long, default_value = "cornell-box")]
+    pub scene: String,
+    /// Also write the signed error (image − reference) as a false-colour PNG: red too bright, blue too dark.
+    #[arg(long)]
+    pub error_image: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -192,6 +214,9 @@ pub struct RenderArgs {
     /// Ambient occlusion instead of radiance.
     #[arg(long)]
     pub ao: bool,
+    /// Which light the image holds: all, direct, or indirect (the gather's part alone).
+    #[arg(long, default_value = "all")]
+    pub component: String,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -222,6 +247,7 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
     Ok(RenderOptions {
         scheme: a.scheme.parse()?,
         ao: a.ao,
+        component: a.component.parse()?,
         ..a.settings.options(a.spp)?
     })
 }

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BenchArgs, Cli, Command, ReferenceArgs, RenderArgs, ReportArgs, Res, options, parse_choices,
+    BenchArgs, Cli, Command, CompareArgs, ReferenceArgs, RenderArgs, ReportArgs, Res, options, parse_choices,
     parse_schemes,
 };
 use clap::Parser;
@@ -26,6 +26,7 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => cmd_render(&args),
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
+        Some(Command::Compare(args)) => cmd_compare(&args),
         Some(Command::Report(args)) => cmd_report(&args),
         Some(Command::Scenes) => cmd_scenes(),
         None => cmd_render(&RenderArgs::default()),
@@ -138,22 +139,59 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
     let opts = ReferenceOptions {
         spp: a.spp,
         bounces: a.bounces,
-        ..Default::default()
+        component: a.component.parse()?,
+        seed: a.seed,
     };
     let out = pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     println!(
-        "pbgi reference: {} {}×{}, {} spp, {} bounce(s), {:.2} s on {} thread(s)",
+        "pbgi reference: {} {}×{}, {} spp, {} bounce(s), {} light, seed {}, {:.2} s on {} thread(s)",
         scene.name,
         scene.camera.width,
         scene.camera.height,
         a.spp,
         a.bounces,
+        opts.component,
+        opts.seed,
         out.seconds,
         pool.current_num_threads()
     );
     println!("wrote {}", out_path.display());
+    Ok(())
+}
+
+fn cmd_compare(a: &CompareArgs) -> Res<()> {
+    let scene = load_scene(&a.scene)?;
+    let (image, reference) = (read_exr(&a.image)?, read_exr(&a.reference)?);
+    let mask = pbgi::report::emitter_mask(&scene);
+    let e = pbgi::report::compare(&image, &reference, &mask)?;
+    println!(
+        "{} against {}: relative RMSE {:.4}, bias {:+.4} (mean {:.5} against {:.5}), over {} pixels ({} seeing an emitter left out)",
+        a.image.display(),
+        a.reference.display(),
+        e.rel_rmse,
+        e.bias,
+        e.mean,
+        e.reference_mean,
+        e.pixels,
+        mask.len() - e.pixels
+    );
+    if let Some(path) = &a.error_image {
+        let png = pbgi::report::error_image(&image, &reference, &mask);
+        image::save_buffer(
+            path,
+            &png,
+            image.width,
+            image.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+        println!(
+            "wrote {} (red: too bright, blue: too dark, full at ±25 % of the mean)",
+            path.display()
+        );
+    }
     Ok(())
 }
 
