@@ -102,15 +102,52 @@ impl NodeArrays {
 /// What splatting reads of a node, in one aligned 32-byte record (one cache
 /// line holds a sibling pair): the splat position (the bounding sphere's
 /// centre), the area below the node, the area-weighted mean normal, and
-/// whether it is a leaf.
+/// its kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct SplatRecord {
     pub center: [f32; 3],
     pub area: f32,
     pub normal: [f32; 3],
-    /// 1 for a leaf, 0 for an inner node.
-    pub leaf: u32,
+    /// [`PLANAR`], [`LEAF`] or [`MIXED`].
+    pub kind: u32,
+}
+
+/// An inner node whose surfels' normals form one [`Cluster`] facet: it
+/// shows its mean normal's projected area and its mean radiance.
+pub(crate) const PLANAR: u32 = 0;
+/// A leaf: its surfel's disk.
+pub(crate) const LEAF: u32 = 1;
+/// An inner node whose normals form two or three facets: it shows the
+/// projected area and the radiance of its [`Cluster`] toward the receiver.
+pub(crate) const MIXED: u32 = 2;
+/// Facets of a cluster.
+pub(crate) const FACETS: usize = 3;
+/// A surfel joins the facet whose first normal is nearest if within this
+/// cosine (about 18°), else starts a facet while there are fewer than three.
+const FACET_COS: f64 = 0.95;
+
+/// A cluster's light by direction, as up to three facets: the surfels
+/// grouped by normal, each group with its area `A`, area-weighted mean normal
+/// `n̄` and power `P = Σ A·L`. Seen from unit direction `u` it shows the area
+/// `Σ A·max(0, n̄·u)` and the radiance `Σ P·max(0, n̄·u) / area`, exact for a
+/// cluster of at most three flat pieces (a box's corner, a wall's foot, a
+/// thin panel's two sides), where one mean normal and one mean radiance show
+/// a corner's cluster with its floor's light blended with its wall's, and
+/// one holding both sides of a panel with no area at all.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct Cluster {
+    /// Per facet: `A·n̄` (x, y, z: the area-weighted normal sum, in the
+    /// units of the node's area), then its mean radiance `P/A` (r, g, b).
+    pub facet: [[f32; 6]; FACETS],
+}
+
+impl Cluster {
+    /// No light in any direction (what a node that is not [`MIXED`] reads).
+    pub(crate) const NONE: Cluster = Cluster {
+        facet: [[0.0; 6]; FACETS],
+    };
 }
 
 /// A read-only view of one node, for inspection and tests.
@@ -162,6 +199,8 @@ pub struct Tree {
     pub(crate) nodes: NodeArrays,
     pub(crate) splat: Vec<SplatRecord>,
     radiance: Vec<Vec3>,
+    /// Per node: its light by direction (used for [`MIXED`] nodes).
+    pub(crate) cluster: Vec<Cluster>,
     depth: u32,
 }
 
@@ -177,6 +216,8 @@ struct BuildNode {
     area: f32,
     normal: Vec3,
     radiance: Vec3,
+    facets: u32,
+    cluster: Cluster,
     depth: u32,
 }
 
@@ -228,9 +269,16 @@ impl Tree {
                 center: b.center,
                 area: b.area,
                 normal: b.normal.to_array(),
-                leaf: u32::from(b.child & LEAF_BIT != 0),
+                kind: if b.child & LEAF_BIT != 0 {
+                    LEAF
+                } else if b.facets <= 1 {
+                    PLANAR
+                } else {
+                    MIXED
+                },
             });
             tree.radiance.push(b.radiance);
+            tree.cluster.push(b.cluster);
         }
         tree
     }
@@ -255,7 +303,8 @@ impl Tree {
     pub fn bytes_per_surfel(&self) -> f64 {
         let per_node = std::mem::size_of::<PairRecord>() / 2
             + std::mem::size_of::<SplatRecord>()
-            + std::mem::size_of::<Vec3>();
+            + std::mem::size_of::<Vec3>()
+            + std::mem::size_of::<Cluster>();
         let surfels = self.len().div_ceil(2).max(1);
         (self.len() * per_node) as f64 / surfels as f64
     }
@@ -424,13 +473,27 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
     let mut area = 0.0f64;
     let mut normal = DVec3::ZERO;
     let mut radiance = DVec3::ZERO;
+    // Facets: first normal, Σ A·n, Σ A·L, Σ A.
+    let mut facets: Vec<(DVec3, DVec3, DVec3, f64)> = Vec::with_capacity(FACETS);
     for &i in order {
         let s = &surfels[i as usize];
         radius = radius.max(s.position.as_dvec3().distance(c) + s.radius as f64);
         let a = (s.radius as f64) * (s.radius as f64);
         area += a;
-        normal += s.normal.as_dvec3() * a;
-        radiance += s.radiance.as_dvec3() * a;
+        let (n, l) = (s.normal.as_dvec3(), s.radiance.as_dvec3());
+        normal += n * a;
+        radiance += l * a;
+        let nearest = (0..facets.len()).max_by(|&x, &y| facets[x].0.dot(n).total_cmp(&facets[y].0.dot(n)));
+        let k = match nearest {
+            Some(k) if facets[k].0.dot(n) >= FACET_COS || facets.len() == FACETS => k,
+            _ => {
+                facets.push((n, DVec3::ZERO, DVec3::ZERO, 0.0));
+                facets.len() - 1
+            }
+        };
+        facets[k].1 += n * a;
+        facets[k].2 += l * a;
+        facets[k].3 += a;
     }
     // The cone's axis is the area-weighted normal direction; its half-angle the
     // widest normal from it. Both are scale-free.
@@ -463,6 +526,19 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
         area: (pi_area as f32).min(f32::MAX),
         normal: (normal / area).as_vec3(),
         radiance: (radiance / area).as_vec3(),
+        facets: facets.len() as u32,
+        // In the units of `area` (π Σ r²), saturating like it.
+        cluster: {
+            let mut cluster = Cluster::NONE;
+            for (f, (_, an, p, a)) in cluster.facet.iter_mut().zip(&facets) {
+                let an = (*an * std::f64::consts::PI)
+                    .as_vec3()
+                    .clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+                let l = (*p / *a).as_vec3();
+                *f = [an.x, an.y, an.z, l.x, l.y, l.z];
+            }
+            cluster
+        },
         depth: 0,
     }
 }

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::compose;
 pub(crate) use super::fragments::Fragments;
-use super::locate::{FrameLanes, Located, NodeSplat, locate};
+use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
 use super::table::Table;
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
@@ -126,8 +126,8 @@ impl MicroBuffer {
     /// Where the node `rec` falls; `None` for a node that cannot show: at
     /// the receiver's position, facing away, or straight below.
     #[inline(always)]
-    pub(super) fn locate(&self, rec: &SplatRecord) -> Option<Located<f32>> {
-        let l = locate(&NodeSplat::of(rec), &self.frame_lanes(), self.half_n());
+    pub(super) fn locate(&self, rec: &SplatRecord, light: &NodeLight<'_>) -> Option<Located<f32>> {
+        let l = locate(&NodeSplat::of(rec), light, &self.frame_lanes(), self.half_n());
         l.valid.then_some(l)
     }
 
@@ -164,10 +164,10 @@ impl MicroBuffer {
     /// instruction set).
     #[inline(always)]
     pub(crate) fn splat_inline(&mut self, tree: &Tree, node: NodeId) {
-        let Some(rec) = tree.splat.get(node as usize) else {
+        let Some((rec, light)) = NodeLight::of(tree, node) else {
             return;
         };
-        if let Some(l) = self.locate(rec) {
+        if let Some(l) = self.locate(rec, &light) {
             self.apply(rec, node, &l);
         }
     }

@@ -31,8 +31,9 @@ const KAPPA: f32 = 2.0;
 
 /// A fragment in sort order: `(near, node)` as one integer (the near depth's
 /// bits mapped to an unsigned order), the coverage's bits (equal keys are
-/// the same node twice in one pixel), the far depth.
-type Sorted = (u64, u32, f32);
+/// the same node twice in one pixel, showing the same radiance), the
+/// fragment's index.
+type Sorted = (u64, u32, u32);
 
 /// `x`'s bits, ordered like `f32::total_cmp` orders `x`.
 #[inline(always)]
@@ -122,7 +123,8 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         start[p + 1] += start[p];
     }
     let mut next = start.clone();
-    let mut sorted: Vec<Sorted> = vec![(0, 0, 0.0); frags.pixel.len()];
+    let mut sorted: Vec<Sorted> = vec![(0, 0, 0); frags.pixel.len()];
+    let mut far = vec![0.0f32; frags.pixel.len()];
     for i in 0..frags.pixel.len() {
         let key = frags.key[i];
         let depth = f32::from_bits((key >> 32) as u32);
@@ -132,11 +134,11 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         sorted[*slot as usize] = (
             u64::from(ordered(depth - r)) << 32 | node,
             frags.cover[i].to_bits(),
-            depth + r,
+            i as u32,
         );
+        far[i] = depth + r;
         *slot += 1;
     }
-    let radiances = tree.radiance_slice();
     let mut out = Composed {
         cover: vec![0.0; pixels],
         radiance: vec![Vec3::ZERO; if radiance { pixels } else { 0 }],
@@ -153,22 +155,22 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         // `end` its far depth.
         let (mut t_pass, mut c, mut l) = (1.0f32, 0.0f32, Vec3::ZERO);
         let (mut s, mut ls, mut end) = (0.0f32, Vec3::ZERO, f32::NEG_INFINITY);
-        for &(near_node, cover, far) in bucket.iter() {
-            let (near, cover) = (unordered((near_node >> 32) as u32), f32::from_bits(cover));
+        for &(near_node, cover, i) in bucket.iter() {
+            let (near, cover, i) = (
+                unordered((near_node >> 32) as u32),
+                f32::from_bits(cover),
+                i as usize,
+            );
             if near > end && s > 0.0 {
                 c += t_pass * s;
                 l += ls * t_pass;
                 t_pass *= (1.0 - KAPPA * s).max(0.0);
                 (s, ls) = (0.0, Vec3::ZERO);
             }
-            end = end.max(far);
+            end = end.max(far[i]);
             s += cover;
             if radiance {
-                // Node 0 of an empty tree: nothing to show.
-                let r = radiances
-                    .get((near_node & 0xFFFF_FFFF) as usize)
-                    .copied()
-                    .unwrap_or(Vec3::ZERO);
+                let r = Vec3::from_array(frags.radiance[i]);
                 ls += r * cover;
                 out.brightest = out.brightest.max(r);
             }

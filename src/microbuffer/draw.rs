@@ -9,7 +9,7 @@ use super::locate::{Located, NodeSplat};
 use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
 use super::table::Table;
 use crate::simd::Real;
-use crate::tree::{NodeId, SplatRecord};
+use crate::tree::{LEAF, NodeId, SplatRecord};
 
 /// Scales the cone fragments `frags[start..]` so that their
 /// `Σ coverage·∫cos` is `target` (`Ω·cosθ`); nothing when `target` is 0 (a
@@ -39,17 +39,24 @@ pub(super) fn normalize_cone(frags: &mut Fragments, start: usize, t: &Table, tar
 impl MicroBuffer {
     /// Draws a small splat.
     #[inline(always)]
-    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64) {
+    pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64, radiance: [f32; 3]) {
         for k in 0..4 {
             let cover = f32::select(plan.w[k] > 0.0, plan.cover[k], 0.0).min_of(1.0);
-            self.frags.push(plan.p[k] as usize, key, cover);
+            self.frags.push(plan.p[k] as usize, key, cover, radiance);
         }
     }
 
     /// Draws a cone around local direction `w`, normalised to `target`
     /// ([`normalize_cone`]).
     #[inline(always)]
-    pub(crate) fn draw_cone(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64, target: f32) {
+    pub(crate) fn draw_cone(
+        &mut self,
+        w: Vec3,
+        plan: &ConePlan<f32>,
+        key: u64,
+        target: f32,
+        radiance: [f32; 3],
+    ) {
         let (c0, c1, r0, r1) = plan.bx.bounds();
         let n = self.table.n;
         let start = self.frags.len();
@@ -59,7 +66,7 @@ impl MicroBuffer {
                 let t = &self.table;
                 let (m, cover) = plan.cover([w.x, w.y, w.z], t.dir_x[p], t.dir_y[p], t.dir_z[p]);
                 if m {
-                    self.frags.push(p, key, cover.min_of(1.0));
+                    self.frags.push(p, key, cover.min_of(1.0), radiance);
                 }
             }
         }
@@ -69,7 +76,7 @@ impl MicroBuffer {
     /// Draws a leaf's disk (depth: the hit distance); false if it covers no
     /// pixel centre.
     #[inline(always)]
-    pub(crate) fn draw_disk(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
+    pub(crate) fn draw_disk(&mut self, plan: &DiskPlan<f32>, node: NodeId, radiance: [f32; 3]) -> bool {
         if !plan.fronts {
             return false;
         }
@@ -82,7 +89,7 @@ impl MicroBuffer {
                 let t = &self.table;
                 let (hit, depth, cover) = plan.hit(t.dir_x[p], t.dir_y[p], t.dir_z[p], t.pixel_size[p]);
                 if hit {
-                    self.frags.push(p, key(depth, node), cover.min_of(1.0));
+                    self.frags.push(p, key(depth, node), cover.min_of(1.0), radiance);
                     any_hit = true;
                 }
             }
@@ -100,24 +107,25 @@ impl MicroBuffer {
         let pixel_omega = f32::gather(&t.solid_angle, pixel);
         let key = key(l.d, node);
         let cos = l.wz.max_of(0.0);
+        let radiance = l.radiance;
         if l.omega < pixel_omega {
             // Also below the horizon, where it adds nothing (cos 0): a cone
             // there would put a pixel's worth at the horizon.
             let plan = plan_small(t, l.x, l.y, l.omega * cos);
-            self.draw_small(&plan, key);
-        } else if rec.leaf != 0 {
+            self.draw_small(&plan, key, radiance);
+        } else if rec.kind == LEAF {
             let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
             // `Ω` is a far-field estimate that blows up for a disk nearly in
             // the receiver's plane: a leaf missing every centre gets a pixel at most.
-            if !self.draw_disk(&plan, node) && visible {
+            if !self.draw_disk(&plan, node, radiance) && visible {
                 let t = &*self.table;
                 let plan = plan_small(t, l.x, l.y, pixel_omega * cos);
-                self.draw_small(&plan, key);
+                self.draw_small(&plan, key, radiance);
             }
         } else {
             let plan = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
             let target = f32::select(visible, l.omega * cos, 0.0);
-            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key, target);
+            self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key, target, radiance);
         }
     }
 }

@@ -13,16 +13,19 @@ pub(crate) struct Fragments {
     /// Fraction of the pixel covered (≥ 0; at most 1 but for a normalised
     /// cone's scaled coverage).
     pub cover: Vec<f32>,
+    /// The radiance the node shows this receiver.
+    pub radiance: Vec<[f32; 3]>,
 }
 
 impl Fragments {
     /// Adds a fragment if it covers anything.
     #[inline(always)]
-    pub fn push(&mut self, pixel: usize, key: u64, cover: f32) {
+    pub fn push(&mut self, pixel: usize, key: u64, cover: f32, radiance: [f32; 3]) {
         if 0.0 < cover {
             self.pixel.push(pixel as u32);
             self.key.push(key);
             self.cover.push(cover);
+            self.radiance.push(radiance);
         }
     }
 
@@ -38,5 +41,6 @@ impl Fragments {
         self.pixel.clear();
         self.key.clear();
         self.cover.clear();
+        self.radiance.clear();
     }
 }

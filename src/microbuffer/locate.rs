@@ -2,8 +2,10 @@
 //! solid angle and map coordinates, written once over lanes like the node
 //! test, so one receiver (`f32`) and sixteen (`F32s`) get the same bits.
 
+use glam::Vec3;
+
 use crate::simd::{F32s, Real};
-use crate::tree::SplatRecord;
+use crate::tree::{Cluster, MIXED, NodeId, SplatRecord, Tree};
 
 /// What splatting reads of a node, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -46,6 +48,44 @@ impl NodeSplat<f32> {
     }
 }
 
+/// What a node shows besides its geometry: its kind, its mean radiance and
+/// its light by direction (read for a [`MIXED`] node only).
+#[derive(Clone, Copy)]
+pub(crate) struct NodeLight<'a> {
+    pub kind: u32,
+    pub radiance: Vec3,
+    pub cluster: &'a Cluster,
+}
+
+impl NodeLight<'static> {
+    /// A node of one mean normal showing `radiance` (`kind`: planar or leaf).
+    #[cfg(test)]
+    pub(crate) fn flat(kind: u32, radiance: Vec3) -> Self {
+        NodeLight {
+            kind,
+            radiance,
+            cluster: &Cluster::NONE,
+        }
+    }
+}
+
+impl<'a> NodeLight<'a> {
+    /// Node `node` of `tree` (`None` if it is not one).
+    #[inline(always)]
+    pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(&'a SplatRecord, Self)> {
+        let k = node as usize;
+        let rec = tree.splat.get(k)?;
+        Some((
+            rec,
+            NodeLight {
+                kind: rec.kind,
+                radiance: tree.radiance_slice()[k],
+                cluster: &tree.cluster[k],
+            },
+        ))
+    }
+}
+
 /// A receiver's position and tangent frame (`t`, `b`, `n`), for one
 /// receiver or one per lane.
 #[derive(Clone, Copy)]
@@ -65,12 +105,13 @@ pub(crate) struct FrameLanes<V> {
 }
 
 /// A splat placed in a receiver's microbuffer: distance and direction
-/// (local) of its centre, projected solid angle, continuous pixel
-/// coordinates; `valid` is false where it cannot show.
+/// (local) of its centre, projected solid angle, the radiance it shows,
+/// continuous pixel coordinates; `valid` is false where it cannot show.
 pub(crate) struct Located<V: Real> {
     pub valid: V::Mask,
     pub d: V,
     pub omega: V,
+    pub radiance: [V; 3],
     pub wx: V,
     pub wy: V,
     pub wz: V,
@@ -78,14 +119,22 @@ pub(crate) struct Located<V: Real> {
     pub y: V,
 }
 
-/// Places node `s` in the microbuffer of receiver `f` (`half` = `N/2`).
+/// Places node `s` (showing `light`) in the microbuffer of receiver `f`
+/// (`half` = `N/2`).
 ///
-/// `Ω = A·max(0, −n̄·ω)/d²`; the centre's local direction `w` goes through
-/// the octahedral map (a centre below the horizon to the horizon point
-/// above it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
+/// `Ω = A·max(0, −n̄·ω)/d²` and the mean radiance; for a [`MIXED`] node the
+/// projected area and the power its [`Cluster`] gives toward `−ω`, and their
+/// ratio as radiance. The centre's local direction `w` goes through the
+/// octahedral map (a centre below the horizon to the horizon point above
+/// it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
 /// non-finite distance or `Ω`, a node facing away, a centre straight below.
 #[inline(always)]
-pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> Located<V> {
+pub(crate) fn locate<V: Real>(
+    s: &NodeSplat<V>,
+    light: &NodeLight<'_>,
+    f: &FrameLanes<V>,
+    half: V,
+) -> Located<V> {
     let vx = s.cx - f.px;
     let vy = s.cy - f.py;
     let vz = s.cz - f.pz;
@@ -93,8 +142,30 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> L
     let d = d2.sqrt();
     let (dx, dy, dz) = (vx / d, vy / d, vz / d);
     let zero = V::splat(0.0);
-    let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
-    let raw = s.area * facing.max_of(zero) / d2;
+    let mean = light.radiance;
+    let (raw, radiance) = if light.kind == MIXED {
+        // Each facet's `A·max(0, −n̄·ω)`, its share of the power with it.
+        let (mut area, mut power) = (zero, [zero; 3]);
+        for f in &light.cluster.facet {
+            let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
+            let w = facing.max_of(zero);
+            area = area + w;
+            power = [
+                power[0] + V::splat(f[3]) * w,
+                power[1] + V::splat(f[4]) * w,
+                power[2] + V::splat(f[5]) * w,
+            ];
+        }
+        let some = zero.lt(area);
+        let ratio = |ch: usize, m: f32| V::select(some, power[ch] / area, V::splat(m));
+        (area / d2, [ratio(0, mean.x), ratio(1, mean.y), ratio(2, mean.z)])
+    } else {
+        let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
+        (
+            s.area * facing.max_of(zero) / d2,
+            [V::splat(mean.x), V::splat(mean.y), V::splat(mean.z)],
+        )
+    };
     // A huge node right in front of the receiver overflows the far-field
     // estimate; it covers at most the hemisphere.
     let omega = raw.min_of(V::splat(std::f32::consts::TAU));
@@ -112,6 +183,7 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, f: &FrameLanes<V>, half: V) -> L
         valid,
         d,
         omega,
+        radiance,
         wx,
         wy,
         wz,

@@ -18,13 +18,13 @@ use std::simd::prelude::*;
 use glam::Vec3;
 
 use super::buffer::{MicroBuffer, key};
-use super::locate::{FrameLanes, NodeSplat, locate};
+use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
 use super::plan::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
 use super::table::Table;
 use crate::cut::CutSink;
 use crate::simd::dispatch::{Kernel, dispatch};
 use crate::simd::{F32s, Isa, LANES, Real, lane_mask, set_bits};
-use crate::tree::{NodeId, Tree};
+use crate::tree::{LEAF, NodeId, Tree};
 
 /// A packet's cut, each node once with the lanes (receivers `0..16` of the
 /// packet) whose cut holds it, gathered from any scheme's splats. Reusable:
@@ -212,10 +212,10 @@ fn cuts_body(
 ) {
     for ((mb, cut), o) in bufs.iter_mut().zip(cuts).zip(out.iter_mut()) {
         for &node in cut {
-            let Some(rec) = tree.splat.get(node as usize) else {
+            let Some((rec, light)) = NodeLight::of(tree, node) else {
                 continue; // not a node of `tree`
             };
-            if let Some(l) = mb.locate(rec) {
+            if let Some(l) = mb.locate(rec, &light) {
                 mb.apply(rec, node, &l);
             }
         }
@@ -240,8 +240,8 @@ fn packet_body(
         for (i, (mb, o)) in bufs.iter_mut().zip(out.iter_mut()).enumerate() {
             for &node in &cut.nodes {
                 if cut.lanes[node as usize] >> i & 1 != 0
-                    && let Some(rec) = tree.splat.get(node as usize)
-                    && let Some(l) = mb.locate(rec)
+                    && let Some((rec, light)) = NodeLight::of(tree, node)
+                    && let Some(l) = mb.locate(rec, &light)
                 {
                     mb.apply(rec, node, &l);
                 }
@@ -256,11 +256,11 @@ fn packet_body(
     let zero = F32s::splat(0.0);
     for &node in &cut.nodes {
         let lanes = cut.lanes[node as usize] & used;
-        let Some(rec) = tree.splat.get(node as usize) else {
+        let Some((rec, light)) = NodeLight::of(tree, node) else {
             continue; // not a node of `tree`
         };
         let s = NodeSplat::of(rec).splat();
-        let l = locate(&s, &frames, half);
+        let l = locate(&s, &light, &frames, half);
         let show = l.valid.to_bitmask() as u16 & lanes;
         if show == 0 {
             continue;
@@ -276,15 +276,17 @@ fn packet_body(
         let cos = l.wz.max_of(zero);
         let small = small_m.to_bitmask() as u16 & show;
         let large = show & !small;
-        let leaf = rec.leaf != 0;
+        let leaf = rec.kind == LEAF;
         let (d, vis) = (l.d.to_array(), visible.to_bitmask() as u16);
+        let rad = l.radiance.map(|c| c.to_array());
+        let radiance = |i: usize| [rad[0][i], rad[1][i], rad[2][i]];
         // Small splats, and the fallback of leaves covering no pixel centre
         // (with `Ω` capped at the pixel's).
         // (An `if`, not `bool::then` with a closure: an out-of-line closure
         // would be compiled for the baseline target, not this clone.)
         let small_plan = if small != 0 || (leaf && large != 0) {
             let plan = plan_small(t, l.x, l.y, F32s::select(small_m, l.omega, pixel_omega) * cos);
-            Some(SmallWrites::new(&plan, l.d, node))
+            Some(SmallWrites::new(&plan, l.d, node, &rad))
         } else {
             None
         };
@@ -311,7 +313,7 @@ fn packet_body(
                     r: r[i],
                     bx: bx.lane(i),
                 };
-                if !bufs[i].draw_disk_tiles(&plan, node)
+                if !bufs[i].draw_disk_tiles(&plan, node, radiance(i))
                     && vis >> i & 1 != 0
                     && let Some(sp) = &small_plan
                 {
@@ -332,7 +334,13 @@ fn packet_body(
                     outer2: outer2[i],
                     bx: bx.lane(i),
                 };
-                bufs[i].draw_cone_tiles(Vec3::new(wx[i], wy[i], wz[i]), &plan, key(d[i], node), target[i]);
+                bufs[i].draw_cone_tiles(
+                    Vec3::new(wx[i], wy[i], wz[i]),
+                    &plan,
+                    key(d[i], node),
+                    target[i],
+                    radiance(i),
+                );
             }
         }
     }
@@ -349,17 +357,19 @@ struct SmallWrites {
     p: [[u32; LANES]; 4],
     key: [u64; LANES],
     cover: [[f32; LANES]; 4],
+    radiance: [[f32; LANES]; 3],
 }
 
 impl SmallWrites {
     #[inline(always)]
-    fn new(plan: &SmallPlan<F32s>, depth: F32s, node: NodeId) -> Self {
+    fn new(plan: &SmallPlan<F32s>, depth: F32s, node: NodeId, radiance: &[[f32; LANES]; 3]) -> Self {
         let key = (depth.to_bits().cast::<u64>() << 32) | Simd::splat(u64::from(node));
         let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
         let mut w = SmallWrites {
             p: [[0; LANES]; 4],
             key: key.to_array(),
             cover: [[0.0; LANES]; 4],
+            radiance: *radiance,
         };
         for k in 0..4 {
             let m = zero.lt(plan.w[k]);
@@ -374,8 +384,14 @@ impl MicroBuffer {
     /// Lane `i`'s part of a small splat.
     #[inline(always)]
     fn draw_small_lane(&mut self, sw: &SmallWrites, i: usize) {
+        let r = &sw.radiance;
         for k in 0..4 {
-            self.frags.push(sw.p[k][i] as usize, sw.key[i], sw.cover[k][i]);
+            self.frags.push(
+                sw.p[k][i] as usize,
+                sw.key[i],
+                sw.cover[k][i],
+                [r[0][i], r[1][i], r[2][i]],
+            );
         }
     }
 }

@@ -6,7 +6,14 @@ use super::locate::*;
 use super::plan::*;
 use super::table::*;
 use crate::rng::Rng;
-use crate::tree::{NodeId, SplatRecord};
+use crate::tree::{LEAF, NodeId, PLANAR, SplatRecord};
+
+/// The light of the test nodes: one normal, radiance one.
+fn flat(rec: &SplatRecord) -> NodeLight<'static> {
+    NodeLight::flat(rec.kind, Vec3::ONE)
+}
+
+const ONE: [f32; 3] = [1.0; 3];
 
 /// A unit-area cluster at `c` facing the origin.
 fn record(c: Vec3) -> SplatRecord {
@@ -14,7 +21,7 @@ fn record(c: Vec3) -> SplatRecord {
         center: c.to_array(),
         area: 1.0,
         normal: (-c).to_array(),
-        leaf: 0,
+        kind: PLANAR,
     }
 }
 
@@ -45,7 +52,7 @@ fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
         center: center.to_array(),
         area: d * d * 10f32.powf(rng.f32() * 5.0 - 4.0),
         normal: normal.to_array(),
-        leaf: u32::from(leaf),
+        kind: if leaf { LEAF } else { PLANAR },
     }
 }
 
@@ -75,29 +82,35 @@ fn tiled_draws_write_the_pixels_of_the_scalar_draws() {
             b.reset(Vec3::ZERO, frame_n);
             let leaf = i % 2 == 0;
             let rec = node_around(&mut rng, leaf);
-            let Some(l) = a.locate(&rec) else { continue };
+            let Some(l) = a.locate(&rec, &flat(&rec)) else {
+                continue;
+            };
             let t = a.table.clone();
             let pixel = pixel_of(&t, l.x, l.y);
             let visible = 0.0 < l.wz;
             drawn += 1;
             if leaf {
                 let plan = plan_disk(&t, &a.frame_lanes(), &NodeSplat::of(&rec), l.x, l.y, pixel, l.d);
-                let hit = a.draw_disk(&plan, node);
-                assert_eq!(hit, b.draw_disk_tiles(&plan, node), "N {n}, node {rec:?}");
+                let hit = a.draw_disk(&plan, node, ONE);
+                assert_eq!(hit, b.draw_disk_tiles(&plan, node, ONE), "N {n}, node {rec:?}");
                 assert!(same_pixels(&a, &b), "disk: N {n}, node {rec:?}");
                 // The cull of disks that cannot face any pixel drops no hit.
                 let mut c = MicroBuffer::new(n).unwrap();
                 c.reset(Vec3::ZERO, frame_n);
                 let unculled = DiskPlan { fronts: true, ..plan };
-                assert_eq!(hit, c.draw_disk(&unculled, node), "cull: N {n}, node {rec:?}");
+                assert_eq!(
+                    hit,
+                    c.draw_disk(&unculled, node, ONE),
+                    "cull: N {n}, node {rec:?}"
+                );
                 assert!(same_pixels(&a, &c), "cull: N {n}, node {rec:?}");
                 hits += usize::from(hit);
             } else {
                 let plan = plan_cone(&t, l.x, l.y, pixel, l.omega, visible);
                 let w = Vec3::new(l.wx, l.wy, l.wz);
                 let target = if visible { l.omega * l.wz } else { 0.0 };
-                a.draw_cone(w, &plan, key(l.d, node), target);
-                b.draw_cone_tiles(w, &plan, key(l.d, node), target);
+                a.draw_cone(w, &plan, key(l.d, node), target, ONE);
+                b.draw_cone_tiles(w, &plan, key(l.d, node), target, ONE);
                 assert!(same_pixels(&a, &b), "cone: N {n}, node {rec:?}");
                 hits += usize::from(a.frags.len() > 0);
             }
@@ -180,7 +193,9 @@ fn every_pixel_centre_lands_in_its_pixel() {
         let mut mb = MicroBuffer::new(n).unwrap();
         mb.reset(Vec3::ZERO, Vec3::Z);
         for (p, d) in mb.table.dir.clone().iter().enumerate() {
-            let l = mb.locate(&record(*d)).expect("upper hemisphere");
+            let l = mb
+                .locate(&record(*d), &flat(&record(*d)))
+                .expect("upper hemisphere");
             assert_eq!(pixel_of(&mb.table, l.x, l.y), p as f32, "n {n} pixel {p} dir {d}");
         }
     }
@@ -193,7 +208,7 @@ fn footprints_reach_every_pixel_within_their_angle() {
     mb.reset(Vec3::ZERO, Vec3::Z);
     let t = mb.table.clone();
     for (i, w) in t.dir.iter().enumerate().step_by(3) {
-        let l = mb.locate(&record(*w)).unwrap();
+        let l = mb.locate(&record(*w), &flat(&record(*w))).unwrap();
         let pixel = pixel_of(&t, l.x, l.y);
         for angle in [0.05f32, 0.2, 0.5, 1.0] {
             let b = footprint(&t, l.x, l.y, pixel, angle);
@@ -210,4 +225,56 @@ fn footprints_reach_every_pixel_within_their_angle() {
             }
         }
     }
+}
+
+/// A cluster spanning a corner (a lit floor and a dim wall) shows a receiver
+/// behind the wall the floor alone: the floor's radiance and projected area,
+/// not the blend of one mean normal and one mean radiance.
+#[test]
+fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
+    use crate::points::{PointCloud, Surfel};
+    let m = 8;
+    let mut surfels = Vec::new();
+    for i in 0..m * m {
+        let (u, v) = ((i % m) as f32 + 0.5, (i / m) as f32 + 0.5);
+        let r = 0.5 / std::f32::consts::PI.sqrt() / m as f32;
+        let s = |position, normal, radiance| Surfel {
+            position,
+            normal,
+            radiance,
+            radius: r,
+        };
+        surfels.push(s(
+            Vec3::new(u / m as f32, 0.0, v / m as f32),
+            Vec3::Y,
+            Vec3::splat(2.0),
+        ));
+        surfels.push(s(
+            Vec3::new(0.0, u / m as f32, v / m as f32),
+            Vec3::X,
+            Vec3::splat(0.5),
+        ));
+    }
+    let tree = crate::tree::Tree::build(&PointCloud::new(surfels.clone()).unwrap());
+    let (rec, light) = NodeLight::of(&tree, 0).unwrap();
+    assert_eq!(rec.kind, crate::tree::MIXED);
+    // Above the floor, behind the wall's back (x < 0): the wall faces away.
+    let at = Vec3::new(-3.0, 4.0, 0.5);
+    let mut mb = MicroBuffer::new(8).unwrap();
+    mb.reset(at, (Vec3::new(0.5, 0.0, 0.5) - at).normalize());
+    let l = mb.locate(rec, &light).expect("the floor faces the receiver");
+    assert_eq!(l.radiance, [2.0; 3], "the floor's radiance alone");
+    let c = Vec3::from_array(rec.center);
+    let (d, u) = ((at - c).length(), (at - c).normalize());
+    let floor_area: f32 = surfels
+        .iter()
+        .filter(|s| s.normal == Vec3::Y)
+        .map(|s| std::f32::consts::PI * s.radius * s.radius)
+        .sum();
+    let want = floor_area * u.y / (d * d);
+    assert!(
+        (l.omega / want - 1.0).abs() < 1e-4,
+        "Ω {} against the floor's {want}",
+        l.omega
+    );
 }

@@ -149,7 +149,14 @@ impl MicroBuffer {
     /// [`draw_cone`](Self::draw_cone) 16 pixels at a time (the 16-lane
     /// pipeline): the same coverage of each pixel, bit for bit.
     #[inline(always)]
-    pub(crate) fn draw_cone_tiles(&mut self, w: Vec3, plan: &ConePlan<f32>, key: u64, target: f32) {
+    pub(crate) fn draw_cone_tiles(
+        &mut self,
+        w: Vec3,
+        plan: &ConePlan<f32>,
+        key: u64,
+        target: f32,
+        radiance: [f32; 3],
+    ) {
         let (t, frags) = (&*self.table, &mut self.frags);
         let start = frags.len();
         let (lanes, wl) = (plan.splat(), [w.x, w.y, w.z].map(F32s::splat));
@@ -162,7 +169,7 @@ impl MicroBuffer {
             }
             let cover = cover.to_array();
             for k in set_bits(hits) {
-                frags.push(tile.pixel(k), key, cover[k].min_of(1.0));
+                frags.push(tile.pixel(k), key, cover[k].min_of(1.0), radiance);
             }
         }
         normalize_cone(frags, start, t, target);
@@ -171,7 +178,7 @@ impl MicroBuffer {
     /// [`draw_disk`](Self::draw_disk) 16 pixels at a time (the 16-lane
     /// pipeline): the same hits, depths and coverage, bit for bit.
     #[inline(always)]
-    pub(crate) fn draw_disk_tiles(&mut self, plan: &DiskPlan<f32>, node: NodeId) -> bool {
+    pub(crate) fn draw_disk_tiles(&mut self, plan: &DiskPlan<f32>, node: NodeId, radiance: [f32; 3]) -> bool {
         if !plan.fronts {
             return false;
         }
@@ -188,7 +195,7 @@ impl MicroBuffer {
             any_hit = true;
             let (depth, cover) = (depth.to_array(), cover.to_array());
             for k in set_bits(hits) {
-                frags.push(tile.pixel(k), key(depth[k], node), cover[k].min_of(1.0));
+                frags.push(tile.pixel(k), key(depth[k], node), cover[k].min_of(1.0), radiance);
             }
         }
         any_hit
