@@ -129,8 +129,8 @@ const FACET_COS: f64 = 0.95;
 
 /// A cluster's light by direction, as up to three facets: the surfels
 /// grouped by normal, each group with its area `A`, area-weighted mean normal
-/// `n̄` and power `P = Σ A·L`. Seen from unit direction `u` it shows the area
-/// `Σ A·max(0, n̄·u)` and the radiance `Σ P·max(0, n̄·u) / area`, exact for a
+/// `n̄` and mean radiance `L̄`. Seen from unit direction `u` it shows the area
+/// `Σ A·max(0, n̄·u)` and the radiance `Σ L̄·A·max(0, n̄·u) / area`, exact for a
 /// cluster of at most three flat pieces (a box's corner, a wall's foot, a
 /// thin panel's two sides), where one mean normal and one mean radiance show
 /// a corner's cluster with its floor's light blended with its wall's, and
@@ -199,7 +199,10 @@ pub struct Tree {
     pub(crate) nodes: NodeArrays,
     pub(crate) splat: Vec<SplatRecord>,
     radiance: Vec<Vec3>,
-    /// Per node: its light by direction (used for [`MIXED`] nodes).
+    /// Per node: the index of its facets in `cluster` ([`MIXED`] nodes
+    /// only; `u32::MAX` for the others, which never read them).
+    pub(crate) facets_of: Vec<u32>,
+    /// The facets of the [`MIXED`] nodes.
     pub(crate) cluster: Vec<Cluster>,
     depth: u32,
 }
@@ -265,20 +268,26 @@ impl Tree {
             } else {
                 NodeArrays::locate(b.child).0 as u32
             };
+            let kind = if b.child & LEAF_BIT != 0 {
+                LEAF
+            } else if b.facets <= 1 {
+                PLANAR
+            } else {
+                MIXED
+            };
             tree.splat.push(SplatRecord {
                 center: b.center,
                 area: b.area,
                 normal: b.normal.to_array(),
-                kind: if b.child & LEAF_BIT != 0 {
-                    LEAF
-                } else if b.facets <= 1 {
-                    PLANAR
-                } else {
-                    MIXED
-                },
+                kind,
             });
             tree.radiance.push(b.radiance);
-            tree.cluster.push(b.cluster);
+            if kind == MIXED {
+                tree.facets_of.push(tree.cluster.len() as u32);
+                tree.cluster.push(b.cluster);
+            } else {
+                tree.facets_of.push(u32::MAX);
+            }
         }
         tree
     }
@@ -299,14 +308,15 @@ impl Tree {
     }
 
     /// Bytes of node data per surfel (the traversal fields, the splat
-    /// records and the radiance).
+    /// records, the radiance and the facets of the mixed nodes).
     pub fn bytes_per_surfel(&self) -> f64 {
         let per_node = std::mem::size_of::<PairRecord>() / 2
             + std::mem::size_of::<SplatRecord>()
             + std::mem::size_of::<Vec3>()
-            + std::mem::size_of::<Cluster>();
+            + std::mem::size_of::<u32>();
         let surfels = self.len().div_ceil(2).max(1);
-        (self.len() * per_node) as f64 / surfels as f64
+        let facets = self.cluster.len() * std::mem::size_of::<Cluster>();
+        (self.len() * per_node + facets) as f64 / surfels as f64
     }
 
     /// True when `node` is a leaf.

@@ -80,7 +80,11 @@ impl<'a> NodeLight<'a> {
             NodeLight {
                 kind: rec.kind,
                 radiance: tree.radiance_slice()[k],
-                cluster: &tree.cluster[k],
+                cluster: if rec.kind == MIXED {
+                    &tree.cluster[tree.facets_of[k] as usize]
+                } else {
+                    &Cluster::NONE
+                },
             },
         ))
     }
@@ -123,8 +127,8 @@ pub(crate) struct Located<V: Real> {
 /// (`half` = `N/2`).
 ///
 /// `Ω = A·max(0, −n̄·ω)/d²` and the mean radiance; for a [`MIXED`] node the
-/// projected area and the power its [`Cluster`] gives toward `−ω`, and their
-/// ratio as radiance. The centre's local direction `w` goes through the
+/// projected area of its [`Cluster`]'s facets toward `−ω`, and their mean
+/// radiances weighted by it. The centre's local direction `w` goes through the
 /// octahedral map (a centre below the horizon to the horizon point above
 /// it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
 /// non-finite distance or `Ω`, a node facing away, a centre straight below.
@@ -144,7 +148,7 @@ pub(crate) fn locate<V: Real>(
     let zero = V::splat(0.0);
     let mean = light.radiance;
     let (raw, radiance) = if light.kind == MIXED {
-        // Each facet's `A·max(0, −n̄·ω)`, its share of the power with it.
+        // Each facet's `A·max(0, −n̄·ω)`, and its radiance weighted by it.
         let (mut area, mut power) = (zero, [zero; 3]);
         for f in &light.cluster.facet {
             let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
