@@ -138,8 +138,9 @@ const FACET_COS: f64 = 0.95;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct Cluster {
-    /// Per facet: `A·n̄` (x, y, z: the area-weighted normal sum, in the
-    /// units of the node's area), then its mean radiance `P/A` (r, g, b).
+    /// Per facet: `A·n̄ / A_node` (x, y, z: the area-weighted normal sum as a
+    /// fraction of the node's area, so at most 1 in length and free of the
+    /// scene's scale), then its mean radiance `P/A` (r, g, b).
     pub facet: [[f32; 6]; FACETS],
 }
 
@@ -537,13 +538,12 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
         normal: (normal / area).as_vec3(),
         radiance: (radiance / area).as_vec3(),
         facets: facets.len() as u32,
-        // In the units of `area` (π Σ r²), saturating like it.
+        // Fractions of the node's area: `|A·n̄| ≤ A`, so a facet's weight
+        // times `MAX_RADIANCE` stays finite however large the node.
         cluster: {
             let mut cluster = Cluster::NONE;
             for (f, (_, an, p, a)) in cluster.facet.iter_mut().zip(&facets) {
-                let an = (*an * std::f64::consts::PI)
-                    .as_vec3()
-                    .clamp(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+                let an = (*an / area).as_vec3();
                 let l = (*p / *a).as_vec3();
                 *f = [an.x, an.y, an.z, l.x, l.y, l.z];
             }

@@ -148,7 +148,8 @@ pub(crate) fn locate<V: Real>(
     let zero = V::splat(0.0);
     let mean = light.radiance;
     let (raw, radiance) = if light.kind == MIXED {
-        // Each facet's `A·max(0, −n̄·ω)`, and its radiance weighted by it.
+        // Each facet's `A·max(0, −n̄·ω)` as a fraction of the node's area (at
+        // most 1, so `L·w` cannot overflow), and its radiance weighted by it.
         let (mut area, mut power) = (zero, [zero; 3]);
         for f in &light.cluster.facet {
             let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
@@ -162,7 +163,10 @@ pub(crate) fn locate<V: Real>(
         }
         let some = zero.lt(area);
         let ratio = |ch: usize, m: f32| V::select(some, power[ch] / area, V::splat(m));
-        (area / d2, [ratio(0, mean.x), ratio(1, mean.y), ratio(2, mean.z)])
+        (
+            s.area * area / d2,
+            [ratio(0, mean.x), ratio(1, mean.y), ratio(2, mean.z)],
+        )
     } else {
         let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
         (

@@ -278,3 +278,44 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
         l.omega
     );
 }
+
+/// A corner cluster as bright as a cloud may be, and so large that its area
+/// times that radiance overflows f32 (its distances still do not): its
+/// facets' weights times their radiance stay finite (they overflowed to ∞
+/// when the weights were in the units of the area).
+#[test]
+fn the_largest_brightest_corner_cluster_shades_finite() {
+    use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
+    let r = 1e18;
+    let s = |position: Vec3, normal| Surfel {
+        position: position * r,
+        normal,
+        radiance: Vec3::splat(MAX_RADIANCE),
+        radius: r,
+    };
+    let surfels: Vec<Surfel> = (0..4)
+        .flat_map(|i| {
+            let u = i as f32 * 2.0;
+            [
+                s(Vec3::new(u, 0.0, 1.0), Vec3::Y),
+                s(Vec3::new(0.0, u + 1.0, 1.0), Vec3::X),
+            ]
+        })
+        .collect();
+    let tree = crate::tree::Tree::build(&PointCloud::new(surfels).unwrap());
+    let (rec, light) = NodeLight::of(&tree, 0).unwrap();
+    assert_eq!(rec.kind, crate::tree::MIXED);
+    let mut mb = MicroBuffer::new(8).unwrap();
+    mb.reset(
+        Vec3::new(4.0, 4.0, 1.0) * r,
+        Vec3::new(-1.0, -1.0, 0.0).normalize(),
+    );
+    mb.splat(&tree, 0);
+    let e = mb.irradiance(&tree);
+    assert!(
+        e.is_finite()
+            && e.min_element() > 0.0
+            && e.max_element() <= std::f32::consts::PI * MAX_RADIANCE * 1.0001,
+        "irradiance {e}"
+    );
+}
