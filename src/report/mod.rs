@@ -11,139 +11,18 @@
 //! dominate the sums.
 
 pub mod bench;
+pub mod compare;
 #[cfg(feature = "plots")]
 pub mod plot;
 
 use std::fmt::Write as _;
 
 use crate::cut::{CutOptions, Scheme, SchemeChoice};
-use crate::render::{
-    Image, ReferenceOptions, RenderError, RenderOptions, Tracer, render, render_reference, shading_point,
-};
+use crate::render::{Image, ReferenceOptions, RenderError, RenderOptions, render, render_reference};
 use crate::scene::Scene;
 
 pub use bench::{BenchOptions, BenchRow, bench};
-
-/// Pixels that see an emitter's front, even in part (true: left out of the
-/// error): those whose centre ray hits an emitter and their 8 neighbours, so
-/// the light's edge pixels, whose value is mostly antialiasing noise, are
-/// left out with it.
-pub fn emitter_mask(scene: &Scene) -> Vec<bool> {
-    let tracer = Tracer::new(scene);
-    let cam = &scene.camera;
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let mut hits = Vec::with_capacity(w * h);
-    for y in 0..h {
-        for x in 0..w {
-            let dir = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-            hits.push(
-                tracer
-                    .closest(cam.origin, dir, f32::INFINITY)
-                    .and_then(|hit| shading_point(scene, &tracer, cam.origin, dir, &hit))
-                    .is_some_and(|sp| sp.emitted.max_element() > 0.0),
-            );
-        }
-    }
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            (y.saturating_sub(1)..(y + 2).min(h))
-                .any(|yy| (x.saturating_sub(1)..(x + 2).min(w)).any(|xx| hits[yy * w + xx]))
-        })
-        .collect()
-}
-
-/// An image measured against a reference over the pixels that see no emitter.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Comparison {
-    /// `sqrt(Σ‖I − R‖² / Σ‖R‖²)`.
-    pub rel_rmse: f64,
-    /// `Σ(I − R) / ΣR` over the channels: the mean's relative error.
-    pub bias: f64,
-    /// Mean of the image over the pixels and channels compared.
-    pub mean: f64,
-    /// Mean of the reference over the same.
-    pub reference_mean: f64,
-    /// Pixels compared.
-    pub pixels: usize,
-}
-
-/// `image` against `reference` over the pixels not in `mask`, in f64.
-pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Comparison, RenderError> {
-    if (image.width, image.height) != (reference.width, reference.height) || mask.len() != image.pixels.len()
-    {
-        return Err(RenderError::Check(format!(
-            "image {}×{} against reference {}×{} ({} mask pixels)",
-            image.width,
-            image.height,
-            reference.width,
-            reference.height,
-            mask.len()
-        )));
-    }
-    let (mut err, mut norm, mut sum, mut sum_ref, mut pixels) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
-    for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
-        if skip {
-            continue;
-        }
-        let (a, b) = (a.as_dvec3(), b.as_dvec3());
-        err += (a - b).length_squared();
-        norm += b.length_squared();
-        sum += a.element_sum();
-        sum_ref += b.element_sum();
-        pixels += 1;
-    }
-    if norm > 0.0 && sum_ref != 0.0 {
-        let n = 3.0 * pixels as f64;
-        Ok(Comparison {
-            rel_rmse: (err / norm).sqrt(),
-            bias: (sum - sum_ref) / sum_ref,
-            mean: sum / n,
-            reference_mean: sum_ref / n,
-            pixels,
-        })
-    } else {
-        Err(RenderError::Check(
-            "the reference is black outside the emitters".into(),
-        ))
-    }
-}
-
-/// Relative RMSE of `image` against `reference` over the pixels not in
-/// `mask`: `sqrt(Σ‖I − R‖² / Σ‖R‖²)`, in f64.
-pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<f64, RenderError> {
-    Ok(compare(image, reference, mask)?.rel_rmse)
-}
-
-/// The signed error `I − R` (luminance-like mean of the channels) as 8-bit
-/// RGB: red where the image is too bright, blue where too dark, saturated at
-/// ±25 % of the reference's mean; pixels in `mask` grey. Same sizes as
-/// [`compare`] checks.
-pub fn error_image(image: &Image, reference: &Image, mask: &[bool]) -> Vec<u8> {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (b, &skip) in reference.pixels.iter().zip(mask) {
-        if !skip {
-            sum += f64::from(b.element_sum()) / 3.0;
-            n += 1;
-        }
-    }
-    let scale = if n > 0 && sum > 0.0 {
-        0.25 * sum / n as f64
-    } else {
-        1.0
-    };
-    let mut out = Vec::with_capacity(image.pixels.len() * 3);
-    for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
-        if skip {
-            out.extend([96, 96, 96]);
-            continue;
-        }
-        let e = (f64::from((*a - *b).element_sum()) / 3.0 / scale).clamp(-1.0, 1.0);
-        let v = (255.0 * (1.0 - e.abs())) as u8;
-        out.extend(if e >= 0.0 { [255, v, v] } else { [v, v, 255] });
-    }
-    out
-}
+pub use compare::{Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse};
 
 /// How an image of the sweep was made.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -188,8 +188,10 @@ pub struct ReferenceArgs {
 pub struct CompareArgs {
     /// The image to measure (.exr).
     pub image: PathBuf,
-    /// The ground truth (.exr), e.g. from `pbgi reference`.
-    pub reference: PathBuf,
+    /// The ground truth (.exr), e.g. from `pbgi reference`; several (other
+    /// `--seed`s) are averaged, and their own noise is estimated and taken out.
+    #[arg(required = true)]
+    pub reference: Vec<PathBuf>,
     /// The scene both show: pixels that see its emitters are left out of the error.
     #[arg(long, default_value = "cornell-box")]
     pub scene: String,

@@ -163,13 +163,18 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
 
 fn cmd_compare(a: &CompareArgs) -> Res<()> {
     let scene = load_scene(&a.scene)?;
-    let (image, reference) = (read_exr(&a.image)?, read_exr(&a.reference)?);
+    let image = read_exr(&a.image)?;
+    let references = a.reference.iter().map(|p| read_exr(p)).collect::<Res<Vec<_>>>()?;
     let mask = pbgi::report::emitter_mask(&scene);
+    let (reference, noise) = pbgi::report::mean_reference(&references, &mask)?;
     let e = pbgi::report::compare(&image, &reference, &mask)?;
+    let against = match a.reference.as_slice() {
+        [one] => one.display().to_string(),
+        many => format!("the mean of {} references", many.len()),
+    };
     println!(
-        "{} against {}: relative RMSE {:.4}, bias {:+.4} (mean {:.5} against {:.5}), over {} pixels ({} seeing an emitter left out)",
+        "{} against {against}: relative RMSE {:.4}, bias {:+.4} (mean {:.5} against {:.5}), over {} pixels ({} seeing an emitter left out)",
         a.image.display(),
-        a.reference.display(),
         e.rel_rmse,
         e.bias,
         e.mean,
@@ -177,6 +182,12 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
         e.pixels,
         mask.len() - e.pixels
     );
+    if let Some(noise) = noise {
+        println!(
+            "the references' mean has noise {noise:.4} of its own; without it the image's relative RMSE is {:.4}",
+            (e.rel_rmse * e.rel_rmse - noise * noise).max(0.0).sqrt()
+        );
+    }
     if let Some(path) = &a.error_image {
         let png = pbgi::report::error_image(&image, &reference, &mask);
         image::save_buffer(
