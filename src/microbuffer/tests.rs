@@ -303,7 +303,7 @@ fn the_largest_brightest_corner_cluster_shades_finite() {
         })
         .collect();
     let tree = crate::tree::Tree::build(&PointCloud::new(surfels).unwrap());
-    let (rec, light) = NodeLight::of(&tree, 0).unwrap();
+    let (rec, _) = NodeLight::of(&tree, 0).unwrap();
     assert_eq!(rec.kind, crate::tree::MIXED);
     let mut mb = MicroBuffer::new(8).unwrap();
     mb.reset(
