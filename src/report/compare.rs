@@ -207,3 +207,44 @@ mod tests {
         assert_eq!(mean_reference(&[a], &mask).unwrap().1, None);
     }
 }
+
+/// `image`, `reference` and their signed error ([`error_image`]) side by
+/// side as one 8-bit RGB picture `3·width × height`: the two images exposed
+/// alike, the reference's mean over the pixels not in `mask` at 0.4 before
+/// the sRGB curve (an indirect-only image is far darker than a frame).
+/// Same sizes as [`compare`] checks.
+pub fn side_by_side(image: &Image, reference: &Image, mask: &[bool]) -> (Vec<u8>, u32, u32) {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (b, &skip) in reference.pixels.iter().zip(mask) {
+        if !skip {
+            sum += f64::from(b.element_sum()) / 3.0;
+            n += 1;
+        }
+    }
+    let scale = if n > 0 && sum > 0.0 {
+        (0.4 * n as f64 / sum) as f32
+    } else {
+        1.0
+    };
+    let exposed = |img: &Image| {
+        Image {
+            width: img.width,
+            height: img.height,
+            pixels: img.pixels.iter().map(|p| *p * scale).collect(),
+        }
+        .to_srgb8()
+    };
+    let panels = [
+        exposed(image),
+        exposed(reference),
+        error_image(image, reference, mask),
+    ];
+    let (w, h) = (image.width as usize, image.height as usize);
+    let mut out = Vec::with_capacity(panels.len() * w * h * 3);
+    for y in 0..h {
+        for panel in &panels {
+            out.extend_from_slice(&panel[y * w * 3..(y + 1) * w * 3]);
+        }
+    }
+    (out, 3 * image.width, image.height)
+}

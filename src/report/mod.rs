@@ -22,7 +22,9 @@ use crate::render::{Image, ReferenceOptions, RenderError, RenderOptions, render,
 use crate::scene::Scene;
 
 pub use bench::{BenchOptions, BenchRow, bench};
-pub use compare::{Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse};
+pub use compare::{
+    Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse, side_by_side,
+};
 
 /// How an image of the sweep was made.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -198,6 +198,9 @@ pub struct CompareArgs {
     /// Also write the signed error (image − reference) as a false-colour PNG: red too bright, blue too dark.
     #[arg(long)]
     pub error_image: Option<PathBuf>,
+    /// Also write the image, the reference and the signed error side by side as one PNG, the two exposed alike.
+    #[arg(long)]
+    pub side_by_side: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]

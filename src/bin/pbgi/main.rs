@@ -203,6 +203,12 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
             path.display()
         );
     }
+    if let Some(path) = &a.side_by_side {
+        let (png, w, h) = pbgi::report::side_by_side(&image, &reference, &mask);
+        image::save_buffer(path, &png, w, h, image::ExtendedColorType::Rgb8)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        println!("wrote {} (image, reference, signed error)", path.display());
+    }
     Ok(())
 }
 
