@@ -7,7 +7,7 @@
 //! discretization, which only density lowers).
 //!
 //! Asserted, through the 16-lane pipeline users run: the error at the render
-//! defaults (Ω 0.05, N 12) ≤ 3 %, at the finest setting ≤ 1 %; it falls as
+//! defaults (Ω 0.05, N 24) ≤ 3 %, at the finest setting ≤ 1 %; it falls as
 //! Ω → 0 and as the density grows; the mean bias stays within ±1 % at every
 //! N from 8 to 64. Figures: BENCHMARKS.md, "The gather against exact
 //! answers" (`cargo run --release --example exact`).
@@ -60,7 +60,7 @@ fn light_room() -> Scene {
 fn small_bright_light_converges_as_the_solid_angle_shrinks() {
     let scene = light_room();
     let probes = mid(&scene);
-    let at = |omega| error(&scene, &probes, 8, Quantity::Irradiance, omega, 12);
+    let at = |omega| error(&scene, &probes, 8, Quantity::Irradiance, omega, 24);
     let (defaults, finer, finest) = (at(0.05), at(0.01), at(0.001));
     assert!(defaults.rel_rmse <= 0.03, "defaults: {defaults:?}");
     assert!(finest.rel_rmse <= 0.01, "finest: {finest:?}");
@@ -105,7 +105,7 @@ fn occlusion_of_an_open_box_is_one_minus_the_form_factor_of_its_opening() {
         ..Default::default()
     });
     let probes = mid(&scene);
-    let defaults = error(&scene, &probes, 8, Quantity::Occlusion, 0.05, 12);
+    let defaults = error(&scene, &probes, 8, Quantity::Occlusion, 0.05, 24);
     let finest = error(&scene, &probes, 8, Quantity::Occlusion, 0.001, 16);
     assert!(
         defaults.rel_rmse <= 0.03 && defaults.bias.abs() <= 0.01,

@@ -86,7 +86,7 @@ impl Default for RenderOptions {
         Self {
             cut: CutOptions::default(),
             scheme: SchemeChoice::Auto,
-            microbuffer: 12,
+            microbuffer: 24,
             bounces: 1,
             spp: 4,
             direct_samples: None,
