@@ -4,9 +4,9 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::light::Lights;
+use super::light::{Lights, triangle};
 use super::trace::Tracer;
-use crate::error::Error;
+use crate::error::{Error, Invalid};
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
 use crate::rng::Rng;
 use crate::scene::Scene;
@@ -47,16 +47,6 @@ fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
     let x = (i as f32 + 0.5) / n as f32;
     let y = (i.reverse_bits() ^ scramble) as f32 * (1.0 / 4_294_967_296.0);
     Vec2::new(x, y)
-}
-
-/// Twice the area of a triangle and its unit normal, `None` when degenerate
-/// or overflowing. The normal is normalized in `f64`: the cross product of a
-/// sliver triangle can be subnormal, and its `f32` length too coarse for a
-/// unit normal.
-fn triangle(v: [Vec3; 3]) -> Option<(f32, Vec3)> {
-    let c = (v[1] - v[0]).cross(v[2] - v[0]).as_dvec3();
-    let len = c.length();
-    (len > 0.0 && len.is_finite() && (len as f32).is_finite()).then(|| (len as f32, (c / len).as_vec3()))
 }
 
 /// Samples the surfels of `scene` and lights them directly (`scene` valid,
@@ -111,10 +101,10 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
             }
         }
     }
-    let (surfels, albedo): (Vec<Surfel>, Vec<Vec3>) = sites
+    let baked: Vec<Option<(Surfel, Vec3)>> = sites
         .par_iter()
         .enumerate()
-        .filter_map(|(i, &(position, normal, radius, material))| {
+        .map(|(i, &(position, normal, radius, material))| {
             let albedo = scene.materials[material].albedo;
             let mut rng = Rng::new(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let f = albedo * std::f32::consts::FRAC_1_PI;
@@ -123,18 +113,27 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
             } else {
                 Vec3::ZERO
             };
-            // A Monte Carlo estimate can overflow near a light (and be NaN
-            // then): clamped into the range a surfel accepts.
+            if !radiance.is_finite() {
+                return Err(Error::InvalidSurfel {
+                    index: i,
+                    reason: Invalid::NonFinite {
+                        field: "radiance (direct light at the surfel)",
+                    },
+                });
+            }
+            // A finite estimate beyond the range a surfel accepts (a surfel
+            // a hair from a light of the brightest emission) saturates.
             let surfel = Surfel {
                 position,
                 normal,
                 radius,
-                radiance: radiance.max(Vec3::ZERO).min(Vec3::splat(MAX_RADIANCE)),
+                radiance: radiance.min(Vec3::splat(MAX_RADIANCE)),
             };
             // Geometry beyond `MAX_COORDINATE` makes no surfel.
-            surfel.validate(i).is_ok().then_some((surfel, albedo))
+            Ok(surfel.validate(i).is_ok().then_some((surfel, albedo)))
         })
-        .unzip();
+        .collect::<Result<_, Error>>()?;
+    let (surfels, albedo): (Vec<Surfel>, Vec<Vec3>) = baked.into_iter().flatten().unzip();
     Ok(Baked {
         cloud: PointCloud::new(surfels).expect("baked surfels are validated one by one"),
         albedo,

@@ -334,6 +334,16 @@ impl<'s> Frame<'s> {
                         acc_others.add(t2.elapsed().as_secs_f64());
                     }
                     for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {
+                        for (stage, v) in [("direct light at receivers", d), ("gather", l)] {
+                            if !v.is_finite() {
+                                let (x, y) = pixels[pp.pixel];
+                                return Err(RenderError::NonFinite {
+                                    stage,
+                                    place: format!("pixel ({x}, {y}), camera sample {s}"),
+                                    value: v.to_array(),
+                                });
+                            }
+                        }
                         sums[pp.pixel] += match opts.component {
                             Component::All => *d + *l,
                             Component::Direct => *d,
@@ -350,15 +360,14 @@ impl<'s> Frame<'s> {
                 progress(d as usize, tiles_total);
                 Ok((out, stats, receivers_done))
             })
-            .collect::<Result<_, Error>>()?;
+            .collect::<Result<_, RenderError>>()?;
 
         let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
         let mut stats = TraversalStats::default();
         let mut receivers = 0;
         for (out, st, n) in tiles {
             for (i, c) in out {
-                // Never let a NaN out: a broken sample becomes black, and is counted in tests.
-                pixels[i as usize] = if c.is_finite() { c } else { Vec3::ZERO };
+                pixels[i as usize] = c;
             }
             stats.merge(&st);
             receivers += n;

@@ -17,6 +17,17 @@ pub struct Lights {
     others: Vec<Light>,
 }
 
+/// Twice the area of a triangle and its unit normal, `None` when degenerate
+/// or overflowing `f32` (such a triangle is neither lit by nor lights
+/// anything: left out of the surfels and of the emitters alike). The normal is normalized in `f64`: the cross product of a
+/// sliver triangle can be subnormal, and its `f32` length too coarse for a
+/// unit normal.
+pub(crate) fn triangle(v: [Vec3; 3]) -> Option<(f32, Vec3)> {
+    let c = (v[1] - v[0]).cross(v[2] - v[0]).as_dvec3();
+    let len = c.length();
+    (len > 0.0 && len.is_finite() && (len as f32).is_finite()).then(|| (len as f32, (c / len).as_vec3()))
+}
+
 impl Lights {
     /// Collects the emitters of `scene`.
     pub fn new(scene: &Scene) -> Lights {
@@ -30,12 +41,10 @@ impl Lights {
             }
             for t in &mesh.triangles {
                 let v = t.map(|i| mesh.positions[i as usize]);
-                let c = (v[1] - v[0]).cross(v[2] - v[0]);
-                let a = 0.5 * c.length();
-                if a > 0.0 {
-                    area += a as f64;
+                if let Some((twice_area, normal)) = triangle(v) {
+                    area += 0.5 * twice_area as f64;
                     cdf.push(area as f32);
-                    triangles.push((v, c.normalize(), radiance));
+                    triangles.push((v, normal, radiance));
                 }
             }
         }

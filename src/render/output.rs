@@ -65,6 +65,16 @@ pub enum RenderError {
     /// A self-check failed (a scheme's cuts differ from the reference's, or
     /// an image does not match its reference's size).
     Check(String),
+    /// A value that is not finite arose: a defect, never masked, reported
+    /// where it first appeared.
+    NonFinite {
+        /// The stage that made it ("direct light at receivers", "gather", …).
+        stage: &'static str,
+        /// Where: the pixel and camera sample, or the surfel.
+        place: String,
+        /// The value (r, g, b).
+        value: [f32; 3],
+    },
 }
 
 impl std::fmt::Display for RenderError {
@@ -73,6 +83,9 @@ impl std::fmt::Display for RenderError {
             RenderError::Scene(e) => e.fmt(f),
             RenderError::Kernel(e) => e.fmt(f),
             RenderError::Check(m) => f.write_str(m),
+            RenderError::NonFinite { stage, place, value } => {
+                write!(f, "{stage}: a value that is not finite ({value:?}) at {place}")
+            }
         }
     }
 }

@@ -144,9 +144,9 @@ pub fn render_reference(
     let grid = (opts.spp as f32).sqrt().ceil() as u32;
     let rows_done = AtomicUsize::new(0);
     progress(0, h as usize);
-    let pixels: Vec<Vec3> = (0..h)
+    let rows: Vec<Vec<Vec3>> = (0..h)
         .into_par_iter()
-        .flat_map_iter(|y| {
+        .map(|y| {
             let row: Vec<Vec3> = (0..w)
                 .map(|x| {
                     let mut rng = Rng::new(
@@ -167,18 +167,24 @@ pub fn render_reference(
                             opts.component,
                             &mut rng,
                         );
-                        if l.is_finite() {
-                            sum += l;
+                        if !l.is_finite() {
+                            return Err(RenderError::NonFinite {
+                                stage: "path tracer",
+                                place: format!("pixel ({x}, {y}), sample {s}"),
+                                value: l.to_array(),
+                            });
                         }
+                        sum += l;
                     }
-                    sum / opts.spp as f32
+                    Ok(sum / opts.spp as f32)
                 })
-                .collect();
+                .collect::<Result<_, RenderError>>()?;
             let d = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(d, h as usize);
-            row
+            Ok(row)
         })
-        .collect();
+        .collect::<Result<_, RenderError>>()?;
+    let pixels = rows.concat();
     Ok(ReferenceOutput {
         image: Image {
             width: w,

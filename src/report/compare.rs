@@ -179,35 +179,6 @@ pub fn mean_reference(references: &[Image], mask: &[bool]) -> Result<(Image, Opt
     ))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use glam::Vec3;
-
-    fn image(pixels: Vec<Vec3>) -> Image {
-        Image {
-            width: pixels.len() as u32,
-            height: 1,
-            pixels,
-        }
-    }
-
-    /// Two references `1 ± 0.1` per channel: mean 1, sample variance
-    /// `2·0.1²` per channel, so noise `sqrt(3·0.02 / 2 / 3) = 0.1`; the masked
-    /// pixel (wildly off) counts in neither.
-    #[test]
-    fn two_references_average_and_estimate_their_noise() {
-        let a = image(vec![Vec3::splat(1.1), Vec3::splat(0.9), Vec3::splat(50.0)]);
-        let b = image(vec![Vec3::splat(0.9), Vec3::splat(1.1), Vec3::splat(-50.0)]);
-        let mask = [false, false, true];
-        let (mean, noise) = mean_reference(&[a.clone(), b], &mask).unwrap();
-        assert_eq!(mean.pixels[..2], [Vec3::ONE, Vec3::ONE]);
-        let noise = noise.expect("two references");
-        assert!((noise - 0.1).abs() < 1e-6, "noise {noise}");
-        assert_eq!(mean_reference(&[a], &mask).unwrap().1, None);
-    }
-}
-
 /// `image`, `reference` and their signed error ([`error_image`]) side by
 /// side as one 8-bit RGB picture `3·width × height`: the two images exposed
 /// alike, the reference's mean over the pixels not in `mask` at 0.4 before
@@ -247,4 +218,33 @@ pub fn side_by_side(image: &Image, reference: &Image, mask: &[bool]) -> (Vec<u8>
         }
     }
     (out, 3 * image.width, image.height)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn image(pixels: Vec<Vec3>) -> Image {
+        Image {
+            width: pixels.len() as u32,
+            height: 1,
+            pixels,
+        }
+    }
+
+    /// Two references `1 ± 0.1` per channel: mean 1, sample variance
+    /// `2·0.1²` per channel, so noise `sqrt(3·0.02 / 2 / 3) = 0.1`; the masked
+    /// pixel (wildly off) counts in neither.
+    #[test]
+    fn two_references_average_and_estimate_their_noise() {
+        let a = image(vec![Vec3::splat(1.1), Vec3::splat(0.9), Vec3::splat(50.0)]);
+        let b = image(vec![Vec3::splat(0.9), Vec3::splat(1.1), Vec3::splat(-50.0)]);
+        let mask = [false, false, true];
+        let (mean, noise) = mean_reference(&[a.clone(), b], &mask).unwrap();
+        assert_eq!(mean.pixels[..2], [Vec3::ONE, Vec3::ONE]);
+        let noise = noise.expect("two references");
+        assert!((noise - 0.1).abs() < 1e-6, "noise {noise}");
+        assert_eq!(mean_reference(&[a], &mask).unwrap().1, None);
+    }
 }
