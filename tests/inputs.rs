@@ -598,3 +598,26 @@ fn zero_receivers() {
         }
     }
 }
+
+/// A packet's cut holds 16 receivers (one bit each): a traversal of 32 into
+/// one is refused, in release builds too, where it once folded receivers
+/// 16–31 into lanes 0–15 and shaded them wrong without a word.
+#[test]
+fn a_packet_cut_refuses_more_than_sixteen_receivers() {
+    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(500, 1));
+    let t = Traversal::new(&tree, CutOptions::default()).unwrap();
+    let receivers: Vec<pbgi::Receiver> = (0..32)
+        .map(|i| pbgi::Receiver::new(Vec3::new(0.5, 0.01 * i as f32, 0.5), Vec3::Y).unwrap())
+        .collect();
+    let mut cut = pbgi::microbuffer::PacketCut::new(&tree);
+    t.run(Scheme::Packet, &receivers[..16], &mut cut);
+    let refused = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        t.run(Scheme::Packet, &receivers, &mut cut);
+    }));
+    let message = refused.expect_err("32 receivers into one packet's cut");
+    let message = message.downcast_ref::<String>().expect("a formatted message");
+    assert!(
+        message.contains("32 receivers for a sink that takes at most 16"),
+        "{message}"
+    );
+}

@@ -151,7 +151,18 @@ impl<'t> Traversal<'t> {
     /// Traverses the tree for every receiver, on this thread, reporting to `sink`.
     /// Packet and hybrid take the receivers 16 at a time in the given order:
     /// order them coherently (screen tiles, Morton order) for full lanes.
+    ///
+    /// Panics if `sink` takes fewer receivers than given
+    /// ([`CutSink::RECEIVERS`]: a [`PacketCut`](crate::microbuffer::PacketCut)
+    /// holds one packet), in release builds too: its lanes would fold
+    /// receivers together and shade them wrong without a word.
     pub fn run<S: CutSink>(&self, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
+        assert!(
+            receivers.len() <= S::RECEIVERS,
+            "{} receivers for a sink that takes at most {}",
+            receivers.len(),
+            S::RECEIVERS
+        );
         dispatch(
             self.isa,
             run::Run {

@@ -16,6 +16,10 @@ pub trait CutSink {
     /// skip that bookkeeping entirely.
     const DISCARDS: bool = false;
 
+    /// The most receivers one traversal may report to this sink
+    /// ([`Traversal::run`](super::Traversal::run) refuses more).
+    const RECEIVERS: usize = usize::MAX;
+
     /// `node` is in the cut of `receiver`.
     fn splat(&mut self, receiver: usize, node: NodeId);
 

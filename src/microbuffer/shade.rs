@@ -82,6 +82,9 @@ impl PacketCut {
 }
 
 impl CutSink for PacketCut {
+    /// One bit per lane: receiver 16 would fold into lane 0.
+    const RECEIVERS: usize = LANES;
+
     #[inline(always)]
     fn splat(&mut self, receiver: usize, node: NodeId) {
         debug_assert!(receiver < LANES, "a packet has 16 receivers");
