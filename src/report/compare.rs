@@ -95,23 +95,24 @@ pub fn relative_rmse(image: &Image, reference: &Image, mask: &[bool]) -> Result<
     Ok(compare(image, reference, mask)?.rel_rmse)
 }
 
+/// The mean of `image`'s channels over the pixels not in `mask`, if positive.
+fn unmasked_mean(image: &Image, mask: &[bool]) -> Option<f64> {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (p, &skip) in image.pixels.iter().zip(mask) {
+        if !skip {
+            sum += f64::from(p.element_sum()) / 3.0;
+            n += 1;
+        }
+    }
+    (n > 0 && sum > 0.0).then(|| sum / n as f64)
+}
+
 /// The signed error `I − R` (luminance-like mean of the channels) as 8-bit
 /// RGB: red where the image is too bright, blue where too dark, saturated at
 /// ±25 % of the reference's mean; pixels in `mask` grey. Same sizes as
 /// [`compare`] checks.
 pub fn error_image(image: &Image, reference: &Image, mask: &[bool]) -> Vec<u8> {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (b, &skip) in reference.pixels.iter().zip(mask) {
-        if !skip {
-            sum += f64::from(b.element_sum()) / 3.0;
-            n += 1;
-        }
-    }
-    let scale = if n > 0 && sum > 0.0 {
-        0.25 * sum / n as f64
-    } else {
-        1.0
-    };
+    let scale = unmasked_mean(reference, mask).map_or(1.0, |m| 0.25 * m);
     let mut out = Vec::with_capacity(image.pixels.len() * 3);
     for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
         if skip {
@@ -185,18 +186,7 @@ pub fn mean_reference(references: &[Image], mask: &[bool]) -> Result<(Image, Opt
 /// the sRGB curve (an indirect-only image is far darker than a frame).
 /// Same sizes as [`compare`] checks.
 pub fn side_by_side(image: &Image, reference: &Image, mask: &[bool]) -> (Vec<u8>, u32, u32) {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (b, &skip) in reference.pixels.iter().zip(mask) {
-        if !skip {
-            sum += f64::from(b.element_sum()) / 3.0;
-            n += 1;
-        }
-    }
-    let scale = if n > 0 && sum > 0.0 {
-        (0.4 * n as f64 / sum) as f32
-    } else {
-        1.0
-    };
+    let scale = unmasked_mean(reference, mask).map_or(1.0, |m| (0.4 / m) as f32);
     let exposed = |img: &Image| {
         Image {
             width: img.width,
