@@ -105,10 +105,12 @@ impl Tracer {
         }
         let id = hit.primitive_id as usize;
         let tri = &self.triangles[id];
-        let (t, uv) = intersect(tri, &ray);
+        // The traversal kept the distance; the barycentrics come from the
+        // same test on the same ray.
+        let (_, uv) = intersect(tri, &ray);
         let (mesh, triangle) = self.ids[id];
         Some(Hit {
-            t: if t.is_finite() { t } else { hit.t },
+            t: hit.t,
             mesh,
             triangle,
             uv,
