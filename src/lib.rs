@@ -71,6 +71,9 @@
 //!   the estimate degrades (bounded, not accurate).
 #![feature(portable_simd)]
 #![warn(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
+// Every `unsafe` block says why it is sound (a `SAFETY:` comment).
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 // Modules in data-flow order: the SIMD vocabulary and dispatch, the kernel
 // layer's data (errors, surfels, tree), cuts, the microbuffer; inputs for

@@ -31,13 +31,15 @@ pub(crate) fn dispatch<K: Kernel>(isa: Isa, kernel: K) -> K::Output {
         "instruction set {isa} is not available on this CPU"
     );
     match isa {
-        // SAFETY (each arm): the assertion above detected the clone's target
-        // features on this CPU.
         #[cfg(target_arch = "x86_64")]
+        // SAFETY: the assertion above detected AVX-512 (the clone's features,
+        // as `Isa::is_available` lists them) on this CPU.
         Isa::Avx512 => unsafe { avx512(kernel) },
         #[cfg(target_arch = "x86_64")]
+        // SAFETY: the assertion above detected AVX2 and FMA on this CPU.
         Isa::Avx2 => unsafe { avx2(kernel) },
         #[cfg(target_arch = "aarch64")]
+        // SAFETY: the assertion above detected NEON on this CPU.
         Isa::Neon => unsafe { neon(kernel) },
         _ => portable(kernel),
     }
