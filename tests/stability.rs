@@ -7,7 +7,11 @@
 //! value) and the energy bounds: irradiance per channel in `[0, π·max L]`,
 //! ambient occlusion in `[0, 1]` (`common::check_bounded`); and, where it
 //! traverses, that every scheme on every path this CPU runs gives the scalar
-//! cut and bitwise the scalar shading (docs/design.md §3).
+//! cut and, through both shading pipelines (scalar `shade_cuts`, 16-lane
+//! `shade_packet`), bitwise the scalar shading: irradiance, occlusion and
+//! glossy radiance for two lobes (`common::shade_everywhere`; docs/design.md
+//! §3). The second bounce (`gather_bounce`) is compared across pipelines on
+//! whole renders: `render.rs` `images_of_every_scheme_and_path_are_bit_identical`.
 //!
 //! | case | test |
 //! | --- | --- |

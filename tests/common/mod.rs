@@ -976,8 +976,159 @@ pub fn all_paths_agree(
 // ---------------------------------------------------------------------------
 // Shading
 
+/// The shading pipelines: the scalar one (each receiver's cut as a list,
+/// splatted one node at a time: `shade_cuts`) and the 16-lane one (a packet's
+/// cut as nodes with their lanes: `shade_packet`). The renderer shades the
+/// scalar scheme through the first and every other scheme through the second.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pipeline {
+    Scalar,
+    Lanes,
+}
+
+impl Pipeline {
+    pub const ALL: [Pipeline; 2] = [Pipeline::Scalar, Pipeline::Lanes];
+
+    /// The pipeline the renderer uses for `scheme`.
+    pub fn of(scheme: Scheme) -> Pipeline {
+        match scheme {
+            Scheme::Scalar => Pipeline::Scalar,
+            _ => Pipeline::Lanes,
+        }
+    }
+}
+
+/// What a receiver's microbuffer gives: irradiance, occlusion (both from the
+/// pipeline's own convolution) and glossy radiance for [`GLOSSY_PROBES`]
+/// (the buffer's glossy convolution over what the pipeline splatted).
+#[derive(Clone, Copy, Debug)]
+pub struct Shaded {
+    pub irradiance: Vec3,
+    pub occlusion: f32,
+    pub glossy: [Vec3; 2],
+}
+
+impl Shaded {
+    pub fn bits(&self) -> [u32; 10] {
+        let (e, g0, g1) = (self.irradiance, self.glossy[0], self.glossy[1]);
+        [e.x, e.y, e.z, self.occlusion, g0.x, g0.y, g0.z, g1.x, g1.y, g1.z].map(f32::to_bits)
+    }
+}
+
+/// The glossy lobes and outgoing directions (in the receiver's frame: x
+/// tangent, z normal) every shading is probed with: a sharp lobe seen at 45°
+/// and a wide one seen near grazing.
+pub const GLOSSY_PROBES: [(f32, [f32; 3]); 2] = [(0.2, [0.6, 0.0, 0.8]), (1.0, [0.95, 0.0, 0.31224990])];
+
+/// A sink keeping each receiver's splats in traversal order (as the
+/// renderer's scalar pipeline receives them).
+struct Lists(Vec<Vec<NodeId>>);
+
+impl CutSink for Lists {
+    fn splat(&mut self, receiver: usize, node: NodeId) {
+        self.0[receiver].push(node);
+    }
+}
+
+/// Shades `receivers` (packets of 16): the cut of `scheme` on `isa`, splatted
+/// through `pipeline` into microbuffers of resolution `res`.
+pub fn shade_with(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+    scheme: Scheme,
+    isa: Isa,
+    pipeline: Pipeline,
+) -> Result<Vec<Shaded>, String> {
+    use pbgi::brdf::GlossyLobe;
+    use pbgi::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
+    let t = traversal(tree, omega, 2, isa)?;
+    let proto = MicroBuffer::new(res).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(receivers.len());
+    for chunk in receivers.chunks(pbgi::LANES) {
+        let mut buffers = vec![proto.clone(); chunk.len()];
+        let mut irradiance = vec![Vec3::ZERO; chunk.len()];
+        let mut occlusion = vec![Vec3::ZERO; chunk.len()];
+        let reset = |buffers: &mut [MicroBuffer]| {
+            for (b, r) in buffers.iter_mut().zip(chunk) {
+                b.reset(r.position(), r.normal());
+            }
+        };
+        match pipeline {
+            Pipeline::Scalar => {
+                let mut lists = Lists(vec![Vec::new(); chunk.len()]);
+                t.run(scheme, chunk, &mut lists);
+                reset(&mut buffers);
+                shade_cuts(
+                    isa,
+                    &mut buffers,
+                    tree,
+                    &lists.0,
+                    Convolution::Occlusion,
+                    &mut occlusion,
+                );
+                reset(&mut buffers);
+                shade_cuts(
+                    isa,
+                    &mut buffers,
+                    tree,
+                    &lists.0,
+                    Convolution::Irradiance,
+                    &mut irradiance,
+                );
+            }
+            Pipeline::Lanes => {
+                let mut cut = PacketCut::new(tree);
+                t.run(scheme, chunk, &mut cut);
+                let mut again = cut.clone();
+                reset(&mut buffers);
+                shade_packet(
+                    isa,
+                    &mut buffers,
+                    tree,
+                    &mut again,
+                    Convolution::Occlusion,
+                    &mut occlusion,
+                );
+                reset(&mut buffers);
+                shade_packet(
+                    isa,
+                    &mut buffers,
+                    tree,
+                    &mut cut,
+                    Convolution::Irradiance,
+                    &mut irradiance,
+                );
+            }
+        }
+        for (i, (b, r)) in buffers.iter().zip(chunk).enumerate() {
+            let n = r.normal();
+            let tangent = n.any_orthonormal_vector();
+            let bitangent = n.cross(tangent);
+            let glossy = GLOSSY_PROBES.map(|(roughness, [x, y, z])| {
+                let wo = (tangent * x + bitangent * y + n * z).normalize();
+                b.glossy(
+                    tree,
+                    wo,
+                    &GlossyLobe {
+                        specular: Vec3::ONE,
+                        roughness,
+                    },
+                )
+            });
+            out.push(Shaded {
+                irradiance: irradiance[i],
+                occlusion: occlusion[i].x,
+                glossy,
+            });
+        }
+    }
+    Ok(out)
+}
+
 /// Irradiance and ambient occlusion at each receiver: the cut of `scheme` on
-/// `isa` splatted into microbuffers of resolution `res`.
+/// `isa` through the pipeline the renderer uses for it.
 pub fn shade(
     tree: &Tree,
     receivers: &[Receiver],
@@ -986,61 +1137,51 @@ pub fn shade(
     scheme: Scheme,
     isa: Isa,
 ) -> Result<Vec<(Vec3, f32)>, String> {
-    use pbgi::microbuffer::{MicroBuffer, MicroBufferSink};
-    let t = traversal(tree, omega, 2, isa)?;
-    let proto = MicroBuffer::new(res).map_err(|e| e.to_string())?;
-    let mut out = Vec::with_capacity(receivers.len());
-    for chunk in receivers.chunks(LANES_PER_CHUNK) {
-        let mut buffers = vec![proto.clone(); chunk.len()];
-        for (b, r) in buffers.iter_mut().zip(chunk) {
-            b.reset(r.position(), r.normal());
-        }
-        t.run(
-            scheme,
-            chunk,
-            &mut MicroBufferSink {
-                tree,
-                buffers: &mut buffers,
-            },
-        );
-        out.extend(buffers.iter().map(|b| (b.irradiance(tree), b.occlusion(tree))));
-    }
-    Ok(out)
+    let s = shade_with(tree, receivers, omega, res, scheme, isa, Pipeline::of(scheme))?;
+    Ok(s.iter().map(|s| (s.irradiance, s.occlusion)).collect())
 }
 
-/// Receivers per microbuffer batch in [`shade`] (two packets).
-const LANES_PER_CHUNK: usize = 32;
-
-/// [`shade`] with every scheme on every path this CPU runs: all must give the
-/// scalar result of the portable path bit for bit (docs/design.md §3). Returns it.
+/// [`shade_with`] with every scheme on every path this CPU runs, through both
+/// pipelines: all must give the scalar result of the portable path bit for
+/// bit, irradiance, occlusion and glossy alike (docs/design.md §3). Returns
+/// its irradiance and occlusion, having checked its glossy radiance is
+/// finite and ≥ 0.
 pub fn shade_everywhere(
     tree: &Tree,
     receivers: &[Receiver],
     omega: f32,
     res: usize,
 ) -> Result<Vec<(Vec3, f32)>, String> {
-    let reference = shade(tree, receivers, omega, res, Scheme::Scalar, Isa::Portable)?;
-    let bits = |v: &[(Vec3, f32)]| -> Vec<u32> {
-        v.iter()
-            .flat_map(|(e, ao)| [e.x, e.y, e.z, *ao].map(f32::to_bits))
-            .collect()
-    };
-    let want = bits(&reference);
+    let reference = shade_with(
+        tree,
+        receivers,
+        omega,
+        res,
+        Scheme::Scalar,
+        Isa::Portable,
+        Pipeline::Scalar,
+    )?;
     for isa in Isa::available() {
         for scheme in Scheme::ALL {
-            let got = shade(tree, receivers, omega, res, scheme, isa)?;
-            if bits(&got) != want {
-                let i = (0..got.len())
-                    .find(|&i| bits(&got[i..=i]) != bits(&reference[i..=i]))
-                    .unwrap_or(0);
-                return Err(format!(
-                    "{scheme} on {isa}, Ω {omega:e}, N {res}: receiver {i} shades {:?}, scalar on portable {:?}",
-                    got[i], reference[i]
-                ));
+            for pipeline in Pipeline::ALL {
+                let got = shade_with(tree, receivers, omega, res, scheme, isa, pipeline)?;
+                if let Some(i) = (0..got.len()).find(|&i| got[i].bits() != reference[i].bits()) {
+                    return Err(format!(
+                        "{scheme} on {isa}, {pipeline:?} pipeline, Ω {omega:e}, N {res}: receiver {i} shades {:?}, scalar on portable {:?}",
+                        got[i], reference[i]
+                    ));
+                }
             }
         }
     }
-    Ok(reference)
+    for (i, s) in reference.iter().enumerate() {
+        for g in s.glossy {
+            if !(g.is_finite() && g.min_element() >= 0.0) {
+                return Err(format!("receiver {i}: glossy radiance {g} is not finite and ≥ 0"));
+            }
+        }
+    }
+    Ok(reference.iter().map(|s| (s.irradiance, s.occlusion)).collect())
 }
 
 /// The energy bounds: irradiance finite, ≥ 0 and at most `π · max L` per
