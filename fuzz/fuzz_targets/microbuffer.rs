@@ -4,7 +4,9 @@
 //! most π·max L per channel (coverage ≤ 1 per pixel, Σ∫cosθ dω = π; plus
 //! rounding, absolute for subnormal radiance), ambient
 //! occlusion in [0, 1], the glossy convolution finite and ≥ 0, and the
-//! shading of a cut the same bit for bit on every scheme and path.
+//! shading of a cut the same bit for bit (irradiance, occlusion, glossy) on
+//! every scheme and path through both shading pipelines: the scalar one
+//! (`shade_cuts`) and the 16-lane one (`shade_packet`).
 #![no_main]
 
 mod shapes;
@@ -13,8 +15,8 @@ use arbitrary::Arbitrary;
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
 use pbgi::brdf::GlossyLobe;
-use pbgi::microbuffer::{MicroBuffer, MicroBufferSink};
-use pbgi::{CutOptions, Isa, PointCloud, Receiver, Scheme, Traversal, Tree};
+use pbgi::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_cuts, shade_packet};
+use pbgi::{CutOptions, CutSink, Isa, NodeId, PointCloud, Receiver, Scheme, Traversal, Tree};
 use shapes::{Dir, OMEGAS, Pos, Scalar, SurfelSpec};
 
 #[derive(Arbitrary, Debug)]
@@ -37,6 +39,61 @@ struct Input {
 
 const RESOLUTIONS: [usize; 10] = [1, 2, 3, 4, 5, 8, 16, 32, 64, 256];
 
+/// One receiver's cut in traversal order, as the scalar pipeline takes it.
+struct List(Vec<NodeId>);
+
+impl CutSink for List {
+    fn splat(&mut self, _receiver: usize, node: NodeId) {
+        self.0.push(node);
+    }
+}
+
+/// What both pipelines are compared on: irradiance and occlusion from the
+/// pipeline's convolution, glossy from the buffer it splatted.
+type Bits = [u32; 7];
+
+struct Probe<'a> {
+    tree: &'a Tree,
+    proto: &'a MicroBuffer,
+    receiver: Receiver,
+    lobe: GlossyLobe,
+    wo: Vec3,
+}
+
+impl Probe<'_> {
+    fn fresh(&self) -> [MicroBuffer; 1] {
+        let mut b = [self.proto.clone()];
+        b[0].reset(self.receiver.position(), self.receiver.normal());
+        b
+    }
+
+    fn bits(&self, e: Vec3, ao: Vec3, b: &MicroBuffer) -> Bits {
+        let g = b.glossy(self.tree, self.wo, &self.lobe);
+        [e.x, e.y, e.z, ao.x, g.x, g.y, g.z].map(f32::to_bits)
+    }
+
+    /// The scalar pipeline on `cut`.
+    fn scalar(&self, isa: Isa, cut: &[NodeId]) -> Bits {
+        let cuts = [cut.to_vec()];
+        let (mut e, mut ao) = ([Vec3::ZERO], [Vec3::ZERO]);
+        let mut b = self.fresh();
+        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Occlusion, &mut ao);
+        let mut b = self.fresh();
+        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Irradiance, &mut e);
+        self.bits(e[0], ao[0], &b[0])
+    }
+
+    /// The 16-lane pipeline on `cut` (the receiver in lane 0).
+    fn lanes(&self, isa: Isa, cut: &PacketCut) -> Bits {
+        let (mut e, mut ao) = ([Vec3::ZERO], [Vec3::ZERO]);
+        let mut b = self.fresh();
+        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Occlusion, &mut ao);
+        let mut b = self.fresh();
+        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Irradiance, &mut e);
+        self.bits(e[0], ao[0], &b[0])
+    }
+}
+
 fuzz_target!(|input: Input| {
     let res = RESOLUTIONS[input.resolution as usize % RESOLUTIONS.len()];
     // The largest rasters cost 10⁵ pixels a splat: fewer surfels there.
@@ -52,7 +109,25 @@ fuzz_target!(|input: Input| {
     ) else {
         return;
     };
+    // A lobe as a valid scene gives it (roughness in (0, 1]).
+    let roughness = input.roughness.value(&[0.01, 0.1, 0.5, 1.0, 1e-3]);
+    let lobe = GlossyLobe {
+        specular: Vec3::splat(0.5),
+        roughness: if roughness > 0.0 && roughness <= 1.0 {
+            roughness
+        } else {
+            0.5
+        },
+    };
+    let wo = shapes::direction(input.wo, &[]).try_normalize().unwrap_or(receiver.normal());
     let proto = MicroBuffer::new(res).expect("resolution in range");
+    let probe = Probe {
+        tree: &tree,
+        proto: &proto,
+        receiver,
+        lobe,
+        wo,
+    };
     let mut mb = proto.clone();
     mb.reset(receiver.position(), receiver.normal());
     if !tree.is_empty() {
@@ -76,19 +151,20 @@ fuzz_target!(|input: Input| {
                     )
                     .expect("path available");
                     for scheme in Scheme::ALL {
-                        let mut buffers = [proto.clone()];
-                        buffers[0].reset(receiver.position(), receiver.normal());
-                        let sink = &mut MicroBufferSink {
-                            tree: &tree,
-                            buffers: &mut buffers,
-                        };
-                        t.run(scheme, &[receiver], sink);
-                        let e = buffers[0].irradiance(&tree).to_array().map(f32::to_bits);
-                        assert_eq!(
-                            *shaded.get_or_insert(e),
-                            e,
-                            "{scheme} on {isa} shades differently"
-                        );
+                        let mut list = List(Vec::new());
+                        t.run(scheme, &[receiver], &mut list);
+                        let mut packet = PacketCut::new(&tree);
+                        t.run(scheme, &[receiver], &mut packet);
+                        for (pipeline, got) in [
+                            ("scalar", probe.scalar(isa, &list.0)),
+                            ("16-lane", probe.lanes(isa, &packet)),
+                        ] {
+                            assert_eq!(
+                                *shaded.get_or_insert(got),
+                                got,
+                                "{scheme} on {isa}, {pipeline} pipeline, shades differently"
+                            );
+                        }
                     }
                 }
                 t.run(
@@ -101,8 +177,25 @@ fuzz_target!(|input: Input| {
                 );
             }
             Splats::Nodes(nodes) => {
-                for &k in nodes.iter().take(256) {
-                    mb.splat(&tree, k as u32 % tree.len() as u32);
+                let nodes: Vec<NodeId> = nodes.iter().take(256).map(|&k| k as u32 % tree.len() as u32).collect();
+                for &k in &nodes {
+                    mb.splat(&tree, k);
+                }
+                // Both pipelines on the list without repeats (a packet's cut
+                // holds a node once), on every path.
+                let mut once = Vec::new();
+                let mut packet = PacketCut::new(&tree);
+                for &k in &nodes {
+                    if !once.contains(&k) {
+                        once.push(k);
+                        packet.splat(0, k);
+                    }
+                }
+                let want = probe.scalar(Isa::Portable, &once);
+                for isa in Isa::available() {
+                    for (pipeline, got) in [("scalar", probe.scalar(isa, &once)), ("16-lane", probe.lanes(isa, &packet))] {
+                        assert_eq!(got, want, "nodes {once:?} on {isa}, {pipeline} pipeline, shade differently");
+                    }
                 }
             }
         }
@@ -116,19 +209,6 @@ fuzz_target!(|input: Input| {
     assert!(!e.cmpgt(bound).any(), "irradiance {e} above π·max L = {bound}");
     let ao = mb.occlusion(&tree);
     assert!((0.0..=1.0).contains(&ao), "occlusion {ao}");
-    // A lobe as a valid scene gives it (roughness in (0, 1]).
-    let roughness = input.roughness.value(&[0.01, 0.1, 0.5, 1.0, 1e-3]);
-    let lobe = GlossyLobe {
-        specular: Vec3::splat(0.5),
-        roughness: if roughness > 0.0 && roughness <= 1.0 {
-            roughness
-        } else {
-            0.5
-        },
-    };
-    let wo = shapes::direction(input.wo, &[]);
-    if let Some(wo) = wo.try_normalize() {
-        let g = mb.glossy(&tree, wo, &lobe);
-        assert!(g.is_finite() && g.min_element() >= 0.0, "glossy {g}");
-    }
+    let g = mb.glossy(&tree, wo, &probe.lobe);
+    assert!(g.is_finite() && g.min_element() >= 0.0, "glossy {g}");
 });
