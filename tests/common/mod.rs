@@ -41,6 +41,23 @@ pub fn path_names() -> String {
         .join(", ")
 }
 
+/// Leaves `what` out of a test, saying `why`: printed, and appended as a
+/// line to the file `PBGI_SKIP_LOG` names, which CI counts in its summary
+/// (`cargo test` shows a passing test's output only with `--nocapture`).
+pub fn skipped(what: &str, why: &str) {
+    use std::io::Write;
+    eprintln!("skipped {what}: {why}");
+    if let Some(path) = std::env::var_os("PBGI_SKIP_LOG").filter(|p| !p.is_empty()) {
+        let line = format!("{}: {what}: {why}\n", env!("CARGO_CRATE_NAME"));
+        let appended = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .and_then(|mut f| f.write_all(line.as_bytes()));
+        appended.unwrap_or_else(|e| panic!("PBGI_SKIP_LOG {}: {e}", std::path::Path::new(&path).display()));
+    }
+}
+
 /// Runs `prop` on `cases()` passing cases (discarded ones do not count).
 pub fn qc<P: Testable>(name: &str, prop: P) {
     let n = cases();
