@@ -61,7 +61,7 @@ fn images_of_every_scheme_and_path_are_bit_identical() {
 }
 
 fn same_image_everywhere(scene: &pbgi::scene::Scene, v: usize) {
-    let (variant, o) = variants(Scheme::Scalar, Isa::Portable)[v].clone();
+    let (variant, o) = variants(Scheme::Scalar, Isa::Portable)[v];
     let reference = render(scene, &o, &|_, _| {}).unwrap();
     assert!(
         reference

@@ -1035,7 +1035,7 @@ impl Shaded {
 /// The glossy lobes and outgoing directions (in the receiver's frame: x
 /// tangent, z normal) every shading is probed with: a sharp lobe seen at 45°
 /// and a wide one seen near grazing.
-pub const GLOSSY_PROBES: [(f32, [f32; 3]); 2] = [(0.2, [0.6, 0.0, 0.8]), (1.0, [0.95, 0.0, 0.31224990])];
+pub const GLOSSY_PROBES: [(f32, [f32; 3]); 2] = [(0.2, [0.6, 0.0, 0.8]), (1.0, [0.95, 0.0, 0.3122499])];
 
 /// A sink keeping each receiver's splats in traversal order (as the
 /// renderer's scalar pipeline receives them).
