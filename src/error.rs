@@ -82,6 +82,15 @@ pub enum Error {
         /// The text given.
         value: String,
     },
+    /// More receivers (or microbuffers) than one call takes: a
+    /// [`PacketCut`](crate::microbuffer::PacketCut) and
+    /// [`shade_packet`](crate::microbuffer::shade_packet) hold one packet.
+    TooManyReceivers {
+        /// Receivers given.
+        given: usize,
+        /// The most taken.
+        most: usize,
+    },
 }
 
 impl fmt::Display for Invalid {
@@ -117,6 +126,12 @@ impl fmt::Display for Error {
                 f,
                 "unknown traversal scheme {value:?} (expected scalar, single, packet or hybrid)"
             ),
+            Error::TooManyReceivers { given, most } => {
+                write!(
+                    f,
+                    "{given} receivers for one call that takes at most {most} (one packet)"
+                )
+            }
         }
     }
 }

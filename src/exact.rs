@@ -470,7 +470,7 @@ pub fn gather(
         };
         if g.lanes && !matches!(what, Quantity::Glossy(_)) {
             t.run(g.scheme, chunk, &mut cut);
-            shade_packet(t.isa(), bufs, tree, &mut cut, conv, &mut values);
+            shade_packet(t.isa(), bufs, tree, &mut cut, conv, &mut values)?;
             out.extend(values[..chunk.len()].iter().map(|v| v.x as f64));
         } else {
             t.run(g.scheme, chunk, &mut MicroBufferSink { tree, buffers: bufs });

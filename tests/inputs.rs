@@ -617,7 +617,56 @@ fn a_packet_cut_refuses_more_than_sixteen_receivers() {
     let message = refused.expect_err("32 receivers into one packet's cut");
     let message = message.downcast_ref::<String>().expect("a formatted message");
     assert!(
-        message.contains("32 receivers for a sink that takes at most 16"),
+        message.contains("32 receivers for one call that takes at most 16"),
         "{message}"
     );
+    // The same as an error, for embedders.
+    assert_eq!(
+        t.try_run(Scheme::Packet, &receivers, &mut cut).unwrap_err(),
+        pbgi::Error::TooManyReceivers { given: 32, most: 16 }
+    );
+    // A receiver index past the packet is refused, not wrapped into lane 0.
+    use pbgi::CutSink;
+    let wrapped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| cut.splat(16, 0)));
+    assert!(wrapped.is_err(), "receiver 16 splatted into a packet's cut");
+}
+
+/// The shading entry points reject misuse with a typed error: a path this
+/// CPU does not run (entering its clone would be undefined behaviour), more
+/// than 16 buffers for one packet, fewer outputs or cuts than buffers.
+#[test]
+fn shading_calls_reject_misuse_with_errors() {
+    use pbgi::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
+    let tree = Tree::build(&pbgi::synthetic::box_with_blocks(500, 1));
+    let absent = pbgi::Isa::ALL
+        .into_iter()
+        .find(|i| !i.is_available())
+        .expect("no CPU runs all of AVX-512, AVX2 and NEON");
+    let mut bufs = vec![MicroBuffer::new(8).unwrap(); 17];
+    let mut out = vec![Vec3::ZERO; 17];
+    let cuts = vec![vec![0]; 17];
+    let mut cut = PacketCut::new(&tree);
+    let isa = pbgi::Isa::best();
+    let conv = Convolution::Irradiance;
+    assert!(matches!(
+        shade_cuts(absent, &mut bufs[..1], &tree, &cuts, conv, &mut out),
+        Err(pbgi::Error::Isa(pbgi::IsaError::Unavailable { .. }))
+    ));
+    assert!(matches!(
+        shade_packet(absent, &mut bufs[..1], &tree, &mut cut, conv, &mut out),
+        Err(pbgi::Error::Isa(pbgi::IsaError::Unavailable { .. }))
+    ));
+    assert_eq!(
+        shade_packet(isa, &mut bufs, &tree, &mut cut, conv, &mut out),
+        Err(pbgi::Error::TooManyReceivers { given: 17, most: 16 })
+    );
+    assert!(matches!(
+        shade_packet(isa, &mut bufs[..4], &tree, &mut cut, conv, &mut out[..3]),
+        Err(pbgi::Error::InvalidParameter { name: "out", .. })
+    ));
+    assert!(matches!(
+        shade_cuts(isa, &mut bufs[..4], &tree, &cuts[..3], conv, &mut out),
+        Err(pbgi::Error::InvalidParameter { .. })
+    ));
+    assert_eq!(shade_cuts(isa, &mut bufs, &tree, &cuts, conv, &mut out), Ok(()));
 }

@@ -176,7 +176,8 @@ fn point_based_and_path_traced_cornell_boxes_agree_pixel_by_pixel() {
     };
     let mut direct_mean = 0.0;
     for bounces in [0, 1, 2] {
-        let (truth, truth_noise) = mean_reference(&[traced(bounces, 11), traced(bounces, 12)], &mask).unwrap();
+        let (truth, truth_noise) =
+            mean_reference(&[traced(bounces, 11), traced(bounces, 12)], &mask).unwrap();
         let truth_noise = truth_noise.unwrap();
         let (a, b) = (point_based(bounces, 1), point_based(bounces, 2));
         let noise = compare(&a, &b, &mask).unwrap().rel_rmse / std::f64::consts::SQRT_2;

@@ -3,8 +3,8 @@
 
 use glam::{DVec3, Vec3};
 use pbgi::render::{RenderOptions, render};
-use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
 use pbgi::scene::builtin::{cornell_box, cornell_box_glossy};
+use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 fn small(mut s: pbgi::scene::Scene) -> pbgi::scene::Scene {
@@ -226,10 +226,7 @@ fn form_factor(p: Vec3, n: Vec3, poly: &[Vec3]) -> f64 {
 /// mean to 1 %.
 #[test]
 fn occlusion_images_match_the_open_box_form_factor() {
-    let (h, corners) = (
-        1.0f32,
-        [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)],
-    );
+    let (h, corners) = (1.0f32, [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]);
     let at = |(x, z): (f32, f32), y: f32| Vec3::new(x, y, z);
     let inside = Vec3::new(0.0, 0.5 * h, 0.0);
     let quad = |name: &str, mut q: [Vec3; 4]| {
@@ -248,7 +245,10 @@ fn occlusion_images_match_the_open_box_form_factor() {
     let mut meshes = vec![quad("floor", corners.map(|c| at(c, 0.0)))];
     for i in 0..4 {
         let (a, b) = (corners[i], corners[(i + 1) % 4]);
-        meshes.push(quad(&format!("wall {i}"), [at(a, 0.0), at(b, 0.0), at(b, h), at(a, h)]));
+        meshes.push(quad(
+            &format!("wall {i}"),
+            [at(a, 0.0), at(b, 0.0), at(b, h), at(a, h)],
+        ));
     }
     let scene = Scene {
         name: "open-box".into(),
@@ -298,7 +298,10 @@ fn occlusion_images_match_the_open_box_form_factor() {
     let (rel_rmse, bias) = ((err2 / exact2).sqrt(), sum / exact_sum - 1.0);
     eprintln!("open box, {n} floor pixels: 1 − AO relative RMSE {rel_rmse:.4}, bias {bias:+.4}");
     assert!(n > 400, "{n} floor pixels");
-    assert!(rel_rmse <= 0.03 && bias.abs() <= 0.01, "relative RMSE {rel_rmse}, bias {bias}");
+    assert!(
+        rel_rmse <= 0.03 && bias.abs() <= 0.01,
+        "relative RMSE {rel_rmse}, bias {bias}"
+    );
 }
 
 #[test]

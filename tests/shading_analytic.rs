@@ -76,7 +76,7 @@ fn irradiance_pipelines(
         let mut out = vec![Vec3::NAN; chunk.len()];
         reset(&mut buffers);
         let cuts: Vec<Vec<u32>> = t.cuts(scheme, chunk).into_iter().map(|c| c.splats).collect();
-        shade_cuts(isa, &mut buffers, tree, &cuts, Convolution::Irradiance, &mut out);
+        shade_cuts(isa, &mut buffers, tree, &cuts, Convolution::Irradiance, &mut out).unwrap();
         scalar.extend_from_slice(&out);
         reset(&mut buffers);
         t.run(scheme, chunk, &mut cut);
@@ -87,7 +87,8 @@ fn irradiance_pipelines(
             &mut cut,
             Convolution::Irradiance,
             &mut out,
-        );
+        )
+        .unwrap();
         lanes.extend_from_slice(&out);
     }
     (scalar, lanes)

@@ -77,9 +77,9 @@ impl Probe<'_> {
         let cuts = [cut.to_vec()];
         let (mut e, mut ao) = ([Vec3::ZERO], [Vec3::ZERO]);
         let mut b = self.fresh();
-        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Occlusion, &mut ao);
+        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Occlusion, &mut ao).unwrap();
         let mut b = self.fresh();
-        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Irradiance, &mut e);
+        shade_cuts(isa, &mut b, self.tree, &cuts, Convolution::Irradiance, &mut e).unwrap();
         self.bits(e[0], ao[0], &b[0])
     }
 
@@ -87,9 +87,9 @@ impl Probe<'_> {
     fn lanes(&self, isa: Isa, cut: &PacketCut) -> Bits {
         let (mut e, mut ao) = ([Vec3::ZERO], [Vec3::ZERO]);
         let mut b = self.fresh();
-        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Occlusion, &mut ao);
+        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Occlusion, &mut ao).unwrap();
         let mut b = self.fresh();
-        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Irradiance, &mut e);
+        shade_packet(isa, &mut b, self.tree, &mut cut.clone(), Convolution::Irradiance, &mut e).unwrap();
         self.bits(e[0], ao[0], &b[0])
     }
 }

@@ -155,15 +155,28 @@ impl<'t> Traversal<'t> {
     /// Panics if `sink` takes fewer receivers than given
     /// ([`CutSink::RECEIVERS`]: a [`PacketCut`](crate::microbuffer::PacketCut)
     /// holds one packet), in release builds too: its lanes would fold
-    /// receivers together and shade them wrong without a word.
+    /// receivers together and shade them wrong without a word. [`try_run`](Self::try_run)
+    /// returns that as an error instead.
     pub fn run<S: CutSink>(&self, scheme: Scheme, receivers: &[Receiver], sink: &mut S) -> TraversalStats {
-        assert!(
-            receivers.len() <= S::RECEIVERS,
-            "{} receivers for a sink that takes at most {}",
-            receivers.len(),
-            S::RECEIVERS
-        );
-        dispatch(
+        self.try_run(scheme, receivers, sink)
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`run`](Self::run), with more receivers than `sink` takes an
+    /// [`Error::TooManyReceivers`].
+    pub fn try_run<S: CutSink>(
+        &self,
+        scheme: Scheme,
+        receivers: &[Receiver],
+        sink: &mut S,
+    ) -> Result<TraversalStats, Error> {
+        if receivers.len() > S::RECEIVERS {
+            return Err(Error::TooManyReceivers {
+                given: receivers.len(),
+                most: S::RECEIVERS,
+            });
+        }
+        Ok(dispatch(
             self.isa,
             run::Run {
                 t: self,
@@ -171,7 +184,7 @@ impl<'t> Traversal<'t> {
                 receivers,
                 sink,
             },
-        )
+        ))
     }
 
     /// The cut of every receiver (sorted), computed in parallel.

@@ -22,6 +22,7 @@ use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
 use super::plan::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
 use super::table::Table;
 use crate::cut::CutSink;
+use crate::error::Error;
 use crate::simd::dispatch::{Kernel, dispatch};
 use crate::simd::{F32s, Isa, LANES, Real, lane_mask, set_bits};
 use crate::tree::{LEAF, NodeId, Tree};
@@ -85,16 +86,18 @@ impl CutSink for PacketCut {
     /// One bit per lane: receiver 16 would fold into lane 0.
     const RECEIVERS: usize = LANES;
 
+    /// Panics for a receiver past 16 (a shift would wrap it into lane 0 and
+    /// shade it as another; `Traversal::try_run` refuses such a packet first).
     #[inline(always)]
     fn splat(&mut self, receiver: usize, node: NodeId) {
-        debug_assert!(receiver < LANES, "a packet has 16 receivers");
+        assert!(receiver < LANES, "receiver {receiver} of a 16-receiver packet");
         self.add(node, 1 << receiver);
     }
 
     #[inline(always)]
     fn splat_receivers(&mut self, base: usize, node: NodeId, lanes: u16) {
-        debug_assert!(base == 0, "a packet's receivers start at 0");
-        self.add(node, lanes << base);
+        assert!(base == 0, "a packet's receivers start at 0, not {base}");
+        self.add(node, lanes);
     }
 }
 
@@ -110,6 +113,9 @@ pub enum Convolution {
 /// Splats cut `cuts[i]` into `bufs[i]` (each reset to its receiver
 /// beforehand) and convolves it into `out[i]`: the scalar reference, one
 /// node and one pixel at a time, on path `isa`.
+///
+/// Errors: `isa` not available on this CPU ([`Error::Isa`]); fewer cuts or
+/// outputs than buffers ([`Error::InvalidParameter`]).
 pub fn shade_cuts(
     isa: Isa,
     bufs: &mut [MicroBuffer],
@@ -117,11 +123,20 @@ pub fn shade_cuts(
     cuts: &[Vec<NodeId>],
     what: Convolution,
     out: &mut [Vec3],
-) {
-    assert!(
-        cuts.len() >= bufs.len() && out.len() >= bufs.len(),
-        "a cut and an output per buffer"
-    );
+) -> Result<(), Error> {
+    isa.require()?;
+    if cuts.len() < bufs.len() || out.len() < bufs.len() {
+        return Err(Error::InvalidParameter {
+            name: "cuts, out",
+            value: format!(
+                "{} cuts and {} outputs for {} buffers",
+                cuts.len(),
+                out.len(),
+                bufs.len()
+            ),
+            expected: "a cut and an output per buffer",
+        });
+    }
     dispatch(
         isa,
         ShadeCuts {
@@ -132,12 +147,17 @@ pub fn shade_cuts(
             out,
         },
     );
+    Ok(())
 }
 
 /// Splats a packet's cut into its receivers' buffers `bufs` (at most 16,
 /// each reset beforehand) and convolves each into `out[i]`, 16 lanes at a
 /// time, on path `isa`; leaves `cut` cleared. Gives the bits of
 /// [`shade_cuts`] on the same cuts.
+///
+/// Errors: `isa` not available on this CPU ([`Error::Isa`]); more than 16
+/// buffers ([`Error::TooManyReceivers`]); fewer outputs than buffers
+/// ([`Error::InvalidParameter`]). `cut` is left as it was.
 pub fn shade_packet(
     isa: Isa,
     bufs: &mut [MicroBuffer],
@@ -145,11 +165,21 @@ pub fn shade_packet(
     cut: &mut PacketCut,
     what: Convolution,
     out: &mut [Vec3],
-) {
-    assert!(
-        bufs.len() <= LANES && out.len() >= bufs.len(),
-        "at most 16 buffers, an output each"
-    );
+) -> Result<(), Error> {
+    isa.require()?;
+    if bufs.len() > LANES {
+        return Err(Error::TooManyReceivers {
+            given: bufs.len(),
+            most: LANES,
+        });
+    }
+    if out.len() < bufs.len() {
+        return Err(Error::InvalidParameter {
+            name: "out",
+            value: format!("{} outputs for {} buffers", out.len(), bufs.len()),
+            expected: "an output per buffer",
+        });
+    }
     if !bufs.is_empty() {
         // The pixel tables, shared by the buffers of one resolution (taken
         // here: reference counting has no place in the clones).
@@ -168,6 +198,7 @@ pub fn shade_packet(
         );
     }
     cut.clear();
+    Ok(())
 }
 
 /// The scalar pipeline's kernel: [`shade_cuts`] inside a clone.

@@ -68,10 +68,13 @@ impl PacketCuts {
     /// through the scheme's shading pipeline on path `isa`, and convolves.
     pub fn shade(&mut self, isa: Isa, tree: &Tree, bufs: &mut [MicroBuffer], what: Convolution) -> Vec<Vec3> {
         let mut out = vec![Vec3::ZERO; bufs.len()];
-        match self {
+        let shaded = match self {
             PacketCuts::Lists(l) => shade_cuts(isa, bufs, tree, &l.0, what, &mut out),
             PacketCuts::Lanes(c) => shade_packet(isa, bufs, tree, c, what, &mut out),
-        }
+        };
+        // The path is the traversal's (detected) and a packet is ≤ 16 receivers
+        // with a list and a buffer each: nothing a caller's data can break.
+        shaded.expect("a packet of a detected path");
         out
     }
 }

@@ -1084,7 +1084,8 @@ pub fn shade_with(
                     &lists.0,
                     Convolution::Occlusion,
                     &mut occlusion,
-                );
+                )
+                .unwrap();
                 reset(&mut buffers);
                 shade_cuts(
                     isa,
@@ -1093,7 +1094,8 @@ pub fn shade_with(
                     &lists.0,
                     Convolution::Irradiance,
                     &mut irradiance,
-                );
+                )
+                .unwrap();
             }
             Pipeline::Lanes => {
                 let mut cut = PacketCut::new(tree);
@@ -1107,7 +1109,8 @@ pub fn shade_with(
                     &mut again,
                     Convolution::Occlusion,
                     &mut occlusion,
-                );
+                )
+                .unwrap();
                 reset(&mut buffers);
                 shade_packet(
                     isa,
@@ -1116,7 +1119,8 @@ pub fn shade_with(
                     &mut cut,
                     Convolution::Irradiance,
                     &mut irradiance,
-                );
+                )
+                .unwrap();
             }
         }
         for (i, (b, r)) in buffers.iter().zip(chunk).enumerate() {
