@@ -284,8 +284,13 @@ fn trace_path(
         // the loop stops at the vertex it hits.
         let Some(wi) = bsdf.sample(n, wo, rng) else { break };
         let pdf = bsdf.pdf(n, wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            break;
+        if pdf.is_nan() {
+            // A defect, not a path to drop: the caller reports the sample as
+            // non-finite (pixel and sample).
+            return Vec3::NAN;
+        }
+        if pdf <= 0.0 {
+            break; // a sample the lobe cannot make (below its cone)
         }
         throughput *= bsdf.eval(n, wo, wi) * (n.dot(wi) / pdf);
         if bounces < 0 && depth >= 3 {
