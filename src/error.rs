@@ -34,6 +34,14 @@ pub enum Invalid {
         /// Its length.
         length: f32,
     },
+    /// Another direction (a glossy receiver's outgoing direction) is zero or
+    /// not of unit length within [`NORMAL_SLACK`](crate::gather::NORMAL_SLACK).
+    NonUnitDirection {
+        /// The field holding it.
+        field: &'static str,
+        /// Its length.
+        length: f32,
+    },
 }
 
 /// Largest accepted `|length² − 1|` of a normal. Normals are never renormalized
@@ -103,6 +111,9 @@ impl fmt::Display for Invalid {
             Invalid::ZeroNormal => write!(f, "normal has zero length"),
             Invalid::NonUnitNormal { length } => {
                 write!(f, "normal has length {length}, expected 1")
+            }
+            Invalid::NonUnitDirection { field, length } => {
+                write!(f, "{field} has length {length}, expected 1")
             }
         }
     }

@@ -76,7 +76,8 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 // Modules in data-flow order: the SIMD vocabulary and dispatch, the kernel
-// layer's data (errors, surfels, tree), cuts, the microbuffer; inputs for
+// layer's data (errors, surfels, tree), cuts, the microbuffer, the gather in
+// one call; inputs for
 // tests and benchmarks (random numbers, synthetic clouds, the closed-form
 // references); then, behind the `render` feature, scenes, the renderer and
 // the report.
@@ -91,6 +92,8 @@ pub mod cut;
 pub mod brdf;
 pub mod microbuffer;
 mod polygon;
+
+pub mod gather;
 
 pub mod rng;
 pub mod synthetic;

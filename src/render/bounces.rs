@@ -2,15 +2,12 @@
 //! surfel from the current cloud and rebuilds the tree.
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use super::options::RenderOptions;
-use super::packets::PacketCuts;
-use crate::cut::{Receiver, Scheme, Traversal};
+use crate::cut::{Scheme, SchemeChoice};
 use crate::error::Error;
-use crate::microbuffer::{Convolution, MicroBuffer};
+use crate::gather::{Gather, GatherOptions, ReceiverOrder};
 use crate::points::{PointCloud, Surfel};
-use crate::simd::LANES;
 use crate::tree::Tree;
 
 /// One more bounce at the surfels: each surfel's radiance becomes its direct
@@ -23,32 +20,23 @@ pub(super) fn gather_bounce(
     scheme: Scheme,
     opts: &RenderOptions,
 ) -> Result<PointCloud, Error> {
-    let traversal = Traversal::new(tree, opts.cut)?;
+    let gather = Gather::new(
+        tree,
+        &GatherOptions {
+            cut: opts.cut,
+            microbuffer: opts.microbuffer,
+            scheme: SchemeChoice::Fixed(scheme),
+            // Tree order: neighbours, as in `Frame::shade`'s tiles.
+            order: ReceiverOrder::Coherent,
+        },
+    )?;
     let surfels = cloud.surfels();
     // The receivers sit a hair above their surfel so it does not see itself edge-on.
-    let receivers: Vec<Receiver> = surfels
+    let receivers: Vec<(Vec3, Vec3)> = surfels
         .iter()
-        .map(|s| Receiver::new(s.position + s.normal * (s.radius * 1e-3), s.normal))
-        .collect::<Result<_, _>>()?;
-    let proto = MicroBuffer::new(opts.microbuffer)?;
-    // The surfels' packets (tree order: neighbours) through the scheme's
-    // shading pipeline, as in `Frame::shade`.
-    let isa = traversal.isa();
-    let gathered: Vec<Vec3> = receivers
-        .par_chunks(LANES)
-        .map_init(
-            || (PacketCuts::for_scheme(scheme, tree), vec![proto.clone(); LANES]),
-            |(cuts, buffers), chunk| {
-                cuts.run(&traversal, scheme, chunk);
-                let buffers = &mut buffers[..chunk.len()];
-                for (b, r) in buffers.iter_mut().zip(chunk) {
-                    b.reset(r.position(), r.normal());
-                }
-                cuts.shade(isa, tree, buffers, Convolution::Irradiance)
-            },
-        )
-        .flatten_iter()
+        .map(|s| (s.position + s.normal * (s.radius * 1e-3), s.normal))
         .collect();
+    let gathered = gather.irradiance(&receivers)?;
     let next: Vec<Surfel> = surfels
         .iter()
         .zip(&gathered)

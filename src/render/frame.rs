@@ -14,16 +14,16 @@ use super::image::Image;
 use super::light::Lights;
 use super::options::{Component, RenderOptions};
 use super::output::{RenderError, RenderOutput, Stage, Timings};
-use super::packets::PacketCuts;
 use super::shading::{ShadingPoint, shading_point};
 use super::trace::Tracer;
-use crate::cut::{Receiver, Scheme, Traversal, TraversalStats};
+use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
 use crate::error::Error;
-use crate::microbuffer::{Convolution, MicroBuffer};
+use crate::gather::{Gather, GatherOptions, Gatherer, ReceiverOrder};
+use crate::microbuffer::Convolution;
 use crate::points::PointCloud;
 use crate::rng::Rng;
 use crate::scene::Scene;
-use crate::simd::{Isa, LANES};
+use crate::simd::LANES;
 use crate::tree::Tree;
 
 /// One tile's pixels (index, radiance), traversal counters and receiver count.
@@ -79,7 +79,7 @@ impl<'s> Frame<'s> {
             }
             .into());
         }
-        MicroBuffer::new(opts.microbuffer)?;
+        crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
         let mut stages = Vec::new();
         let needs_points = opts.ao || opts.bounces > 0;
         let scheme = opts.scheme.resolve(LANES);
@@ -166,14 +166,24 @@ impl<'s> Frame<'s> {
         self.scheme
     }
 
-    /// The scheme for a packet of `receivers` receivers.
-    pub(crate) fn scheme_for(&self, receivers: usize) -> Scheme {
-        self.opts.scheme.resolve(receivers)
+    /// The gather with this frame's options: the traversal, the microbuffers
+    /// and the shading pipeline of its scheme, over the frame's tiles
+    /// (coherent packets).
+    pub(crate) fn gather(&self) -> Result<Gather<'_>, Error> {
+        self.gather_with(self.opts.scheme)
     }
 
-    /// The traversal with this frame's options and `scheme`'s needs.
-    pub(crate) fn traversal(&self) -> Result<Traversal<'_>, Error> {
-        Traversal::new(&self.tree, self.opts.cut)
+    /// [`gather`](Self::gather) with another scheme (for benchmarks).
+    pub(crate) fn gather_with(&self, scheme: SchemeChoice) -> Result<Gather<'_>, Error> {
+        Gather::new(
+            &self.tree,
+            &GatherOptions {
+                cut: self.opts.cut,
+                microbuffer: self.opts.microbuffer,
+                scheme,
+                order: ReceiverOrder::Coherent,
+            },
+        )
     }
 
     /// Number of 4×4-pixel tiles.
@@ -251,27 +261,17 @@ impl<'s> Frame<'s> {
             .collect()
     }
 
-    /// Splats each point's cut into its microbuffer and convolves, on path
-    /// `isa`: the indirect light (or `1 − AO`) at each point. `bufs` holds at
-    /// least one buffer per point.
-    pub(crate) fn shade(
-        &self,
-        points: &[PacketPoint],
-        cuts: &mut PacketCuts,
-        bufs: &mut [MicroBuffer],
-        isa: Isa,
-    ) -> Vec<Vec3> {
+    /// Splats each point's cut (the packet `gatherer` cut last) into its
+    /// microbuffer and convolves: the indirect light (or `1 − AO`) at each point.
+    pub(crate) fn shade(&self, points: &[PacketPoint], gatherer: &mut Gatherer) -> Vec<Vec3> {
         let tree = &self.tree;
-        let bufs = &mut bufs[..points.len()];
-        for (mb, pp) in bufs.iter_mut().zip(points) {
-            mb.reset(pp.point.position, pp.point.normal);
-        }
         let what = if self.opts.ao {
             Convolution::Occlusion
         } else {
             Convolution::Irradiance
         };
-        let out = cuts.shade(isa, tree, bufs, what);
+        let out = gatherer.shade(what);
+        let bufs = gatherer.buffers();
         points
             .iter()
             .zip(bufs.iter())
@@ -299,8 +299,7 @@ impl<'s> Frame<'s> {
     pub fn render(&self, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<RenderOutput, RenderError> {
         let wall = Instant::now();
         let opts = &self.opts;
-        let traversal = self.traversal()?;
-        let mb_proto = MicroBuffer::new(opts.microbuffer)?;
+        let gather = self.gather()?;
         let (w, h) = (self.scene.camera.width, self.scene.camera.height);
         let tiles_total = self.tiles();
         progress(0, tiles_total);
@@ -311,8 +310,7 @@ impl<'s> Frame<'s> {
             .into_par_iter()
             .map(|tile| {
                 let mut stats = TraversalStats::default();
-                let mut cuts = PacketCuts::for_scheme(self.scheme, &self.tree);
-                let mut bufs = vec![mb_proto.clone(); LANES];
+                let mut gatherer = gather.gatherer();
                 let mut receivers_done = 0;
                 let pixels = self.tile_pixels(tile);
                 let mut sums = vec![Vec3::ZERO; pixels.len()];
@@ -326,11 +324,10 @@ impl<'s> Frame<'s> {
                     if self.needs_points && !points.is_empty() {
                         let receivers = Self::receivers(&points)?;
                         let t1 = Instant::now();
-                        let scheme = self.scheme_for(receivers.len());
-                        stats.merge(&cuts.run(&traversal, scheme, &receivers));
+                        stats.merge(&gatherer.cut(&receivers)?);
                         let t2 = Instant::now();
                         acc_trav.add((t2 - t1).as_secs_f64());
-                        indirect = self.shade(&points, &mut cuts, &mut bufs, traversal.isa());
+                        indirect = self.shade(&points, &mut gatherer);
                         acc_others.add(t2.elapsed().as_secs_f64());
                     }
                     for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {
@@ -388,7 +385,7 @@ impl<'s> Frame<'s> {
             stats,
             scheme: self.scheme,
             choice: self.opts.scheme,
-            isa: traversal.isa(),
+            isa: gather.path().isa,
             surfels: self.surfels,
             receivers,
             stages: self.stages.clone(),

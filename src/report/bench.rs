@@ -13,9 +13,8 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cut::{CutSink, Scheme, SchemeChoice, TraversalStats};
-use crate::microbuffer::MicroBuffer;
-use crate::render::{Frame, PacketCuts, PacketPoint, RenderError, RenderOptions};
+use crate::cut::{CutSink, Scheme, SchemeChoice, Traversal, TraversalStats};
+use crate::render::{Frame, PacketPoint, RenderError, RenderOptions};
 use crate::rng::mix;
 use crate::scene::Scene;
 use crate::simd::{Isa, LANES};
@@ -217,7 +216,7 @@ pub fn bench(
     let mut done = 0;
 
     let frame = Frame::prepare(scene, &opts.render)?;
-    let traversal = frame.traversal()?;
+    let traversal = Traversal::new(frame.tree(), frame.opts.cut)?;
     let threads = rayon::current_num_threads();
 
     // The receivers: every camera sample of every tile, one packet each.
@@ -296,24 +295,18 @@ pub fn bench(
     // from the traversal that makes them, in both pipelines: the scalar one
     // (the scalar row's) and the 16-lane one (every other row's).
     // Thread-seconds over threads.
-    let proto = MicroBuffer::new(frame.opts.microbuffer)?;
-    let isa = traversal.isa();
     let mut others = [f64::INFINITY; 2];
     for _ in 0..rounds {
         for (o, scheme) in others.iter_mut().zip([Scheme::Scalar, Scheme::Packet]) {
+            let gather = frame.gather_with(SchemeChoice::Fixed(scheme))?;
             let shade_ns: u64 = packets
                 .par_iter()
                 .map_init(
-                    || {
-                        (
-                            PacketCuts::for_scheme(scheme, frame.tree()),
-                            vec![proto.clone(); LANES],
-                        )
-                    },
-                    |(cuts, bufs), p| {
-                        cuts.run(&traversal, scheme, &p.receivers);
+                    || gather.gatherer(),
+                    |g, p| {
+                        g.cut(&p.receivers).expect("a packet of at most 16");
                         let t0 = Instant::now();
-                        let l = frame.shade(&p.points, cuts, bufs, isa);
+                        let l = frame.shade(&p.points, g);
                         std::hint::black_box(l);
                         t0.elapsed().as_nanos() as u64
                     },
