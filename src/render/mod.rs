@@ -7,8 +7,9 @@
 //! it leaves as a [`RenderOutput`] (image, Table-1 times, counters, stages).
 //! The files, in data-flow order: `options`; `trace` (ray queries), `light`
 //! (direct light), `bake` (surfels with their direct light), `bounces`
-//! (extra bounces at the surfels); `shading` (shading points), `packets` (a
-//! packet's cuts and their shading), `frame` (the frame, tile by tile);
+//! (extra bounces at the surfels, through [`Gather`](crate::gather::Gather));
+//! `shading` (shading points), `frame` (the frame, tile by tile, each packet
+//! through a [`Gatherer`](crate::gather::Gatherer));
 //! `image` and `output` (what comes out); `reference` (the path tracer the
 //! report measures against).
 
