@@ -40,18 +40,23 @@
 //! Occlusion is the covered fraction of the cosine-weighted hemisphere, in
 //! [0, 1]. Glossy radiance is `∫ L f_s cosθ dω` for the given lobe.
 //!
-//! **Choosing Ω and N.** The error against closed-form answers
-//! (`cargo run --release --example exact`, BENCHMARKS.md) falls as Ω falls
-//! and the surfels get denser; N matters little from 16 on. At a few surfels
-//! per receiver's footprint:
+//! **Choosing Ω and N.** Measured against closed-form answers in convex
+//! rooms (`cargo run --release --example exact`; the full table in
+//! `docs/exact/after-facet-units.txt`, ~10⁵ surfels, one thread), the
+//! relative RMSE of receivers mid-surface:
 //!
-//! | target (relative RMSE) | `max_solid_angle` Ω | `microbuffer` N |
-//! | --- | --- | --- |
-//! | about 3 % (the defaults) | 0.05 | 24 |
-//! | about 2 % | 0.02 | 24–32 |
-//! | about 1 % | 0.005–0.01 | 32 |
+//! | Ω (`cut.max_solid_angle`) | N (`microbuffer`) | irradiance | glossy (α 0.3) | µs per receiver |
+//! | --- | --- | --- | --- | --- |
+//! | 0.05 (default) | 24 (default) | 0.3–1 % | 0.6–1.5 % | 150–180 |
+//! | 0.02 | 32 | 0.2 % | 0.5 % | 320–450 |
+//! | 0.01 | 32 | 0.1 % | 0.5 % | 550 |
 //!
-//! Each halving of Ω costs about 1.5–2× the time per receiver.
+//! Ω sets the error of the far field; N matters for glossy lobes (N 8
+//! gives 7 % there, whatever Ω) and little for irradiance from 16 on. Near
+//! edges and in corners the error is set by the surfel density, not by Ω or
+//! N: 5–7 % at 2–4 surfels across a receiver's distance to the edge, 2.5–3.5
+//! % at 8. Irradiance costs the same as occlusion; glossy adds a
+//! convolution of N² pixels per receiver.
 //!
 //! A renderer forming its own packets (screen tiles) uses a [`Gatherer`]
 //! per thread instead: one packet at a time, the microbuffers kept for
