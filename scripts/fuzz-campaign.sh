@@ -8,6 +8,11 @@
 #
 #   scripts/fuzz-campaign.sh                 # all targets, 10^6 runs each
 #   scripts/fuzz-campaign.sh 200000 2 microbuffer
+#   FUZZ_SANITIZER=none scripts/fuzz-campaign.sh 1000000 2 microbuffer
+#
+# FUZZ_SANITIZER (default address) is cargo fuzz's `-s`: `none` runs the
+# microbuffer target about 10x faster (its unsafe code is the dispatch and one
+# bounds-checked-in-debug read; the 16-lane pipeline is safe code).
 #
 # A crash, a panic (a scheme, path or shading pipeline disagreeing is an
 # assertion), more than 2 GB resident, a 1 GB allocation or a unit slower
@@ -18,6 +23,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-1000000}
 JOBS=${2:-$(nproc)}
+SAN=${FUZZ_SANITIZER:-address}
 shift $(($# < 2 ? $# : 2))
 TARGETS=("$@")
 [ ${#TARGETS[@]} -gt 0 ] || TARGETS=(traversal scene_parsers microbuffer)
@@ -28,21 +34,21 @@ REPORT=target/fuzz-campaign.txt
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 failed=""
-echo "# $(date -u +%FT%TZ) $(git rev-parse --short HEAD 2>/dev/null || echo '?'), $RUNS runs a target on $JOBS job(s)" | tee -a "$REPORT"
+echo "# $(date -u +%FT%TZ) $(git rev-parse --short HEAD 2>/dev/null || echo '?'), $RUNS runs a target on $JOBS job(s), sanitizer $SAN" | tee -a "$REPORT"
 for target in "${TARGETS[@]}"; do
     corpus="$WORK/$target"
     mkdir -p "$corpus" "$WORK/logs-$target"
     cp -R "fuzz/corpus/$target/." "$corpus/"
     [ ! -d "fuzz/regressions/$target" ] || cp -R "fuzz/regressions/$target/." "$corpus/"
     before=$(find "fuzz/corpus/$target" -type f | wc -l)
-    cargo fuzz build -O "$target"
+    cargo fuzz build -O -s "$SAN" "$target"
     t0=$(date +%s)
     # Each job runs its share; libFuzzer writes job I's log to fuzz-I.log in
     # the working directory (the logs folder, via -jobs' relative paths).
     per=$(((RUNS + JOBS - 1) / JOBS))
     rc=0
     # (Outside the repository rust-toolchain.toml is not seen: name nightly.)
-    (cd "$WORK/logs-$target" && cargo +nightly fuzz run --fuzz-dir "$OLDPWD/fuzz" -O "$target" "$corpus" -- \
+    (cd "$WORK/logs-$target" && cargo +nightly fuzz run --fuzz-dir "$OLDPWD/fuzz" -O -s "$SAN" "$target" "$corpus" -- \
         -runs="$per" -jobs="$JOBS" -workers="$JOBS" -rss_limit_mb=2048 -malloc_limit_mb=1024 \
         -timeout=20 -print_final_stats=1 -artifact_prefix="$OLDPWD/fuzz/artifacts/$target/" \
         > "$WORK/$target.log" 2>&1) || rc=$?
@@ -60,7 +66,7 @@ for target in "${TARGETS[@]}"; do
     fi
     # Minimise the grown corpus into the committed folder.
     mkdir -p "$WORK/min-$target"
-    cargo fuzz cmin -O "$target" "$corpus" > "$WORK/cmin-$target.log" 2>&1 || {
+    cargo fuzz cmin -O -s "$SAN" "$target" "$corpus" > "$WORK/cmin-$target.log" 2>&1 || {
         echo "cmin failed for $target:"
         tail -n 20 "$WORK/cmin-$target.log"
         failed="$failed $target(cmin)"
