@@ -204,6 +204,18 @@ fn obj_errors_and_materials() {
     assert_eq!(parse_line(e), 3);
     let e = load(&write("badv.obj", "v 0 0 0\nv 1 nope 0\n")).unwrap_err();
     assert_eq!(parse_line(e), 2);
+    // Faces of one or two vertices (lines, points: real exports have them)
+    // are left out with a warning naming the first; the rest loads.
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2\nf 1 2 3\nf 4\nf 2 4 3\n";
+    let s = load(&write("lines.obj", text)).unwrap();
+    assert_eq!(s.triangle_count(), 2);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("2 face(s) with fewer than three vertices") && w.contains("line 5")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]

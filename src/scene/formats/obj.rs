@@ -17,6 +17,8 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
     // Counts of v, vt and vn lines so far: every face index must refer to one
     // (tobj's own checks miss some and then index out of bounds).
     let mut counts = [0i64; 3];
+    // Lines (0-based) of faces with fewer than three vertices.
+    let mut degenerate: Vec<usize> = Vec::new();
     // Material names in order of first use, for an OBJ whose MTL is missing.
     let mut used_materials: Vec<String> = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -44,7 +46,10 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
             Some("f") => {
                 let idx: Vec<_> = w.collect();
                 if idx.len() < 3 {
-                    return Err(parse_err(path, i + 1, "a face needs three vertices"));
+                    // Lines and points written as faces (real exports have
+                    // them): no area to light, left out with a warning.
+                    degenerate.push(i);
+                    continue;
                 }
                 for t in idx {
                     for (slot, part) in t.split('/').enumerate() {
@@ -113,6 +118,22 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         let map = names.iter().enumerate().map(|(k, n)| (n.clone(), k)).collect();
         Ok((stand_ins, map))
     };
+    // The text tobj reads: degenerate faces commented out (lines keep their numbers).
+    let text = if degenerate.is_empty() {
+        text
+    } else {
+        let mut skip = degenerate.iter().peekable();
+        text.lines()
+            .enumerate()
+            .map(|(i, line)| {
+                if skip.next_if_eq(&&i).is_some() {
+                    format!("# {line}\n")
+                } else {
+                    format!("{line}\n")
+                }
+            })
+            .collect()
+    };
     let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, load_mtl)
         .map_err(|e| parse_err(path, 0, e.to_string()))?;
     let mut warnings: Vec<String> = mtl_problems
@@ -126,6 +147,14 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
             )
         })
         .collect();
+    if let Some(first) = degenerate.first() {
+        warnings.push(format!(
+            "{}: {} face(s) with fewer than three vertices left out (the first at line {})",
+            path.display(),
+            degenerate.len(),
+            first + 1
+        ));
+    }
     let mtl = mtl.unwrap_or_else(|e| {
         warnings.push(format!(
             "{}: materials not read ({e}), default grey used",
