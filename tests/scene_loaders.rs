@@ -218,6 +218,47 @@ fn obj_errors_and_materials() {
     );
 }
 
+/// OFF meshes load as bare meshes (default material and camera); polygons
+/// are fan-triangulated, faces of fewer than three vertices left out with a
+/// warning; malformed files name the line.
+#[test]
+fn off_meshes_and_their_errors() {
+    let text = "OFF\n# a unit square and a stray edge\n5 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n4 0 1 2 3\n2 0 4\n3 0 1 4 255 0 0\n";
+    let s = load(&write("square.off", text)).unwrap();
+    assert_eq!(s.triangle_count(), 3);
+    assert_eq!(s.meshes[0].triangles[..2], [[0, 1, 2], [0, 2, 3]]);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("a bare mesh")),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("1 face(s) with fewer than three vertices") && w.contains("line 10")),
+        "{:?}",
+        s.warnings
+    );
+    // Counts on the keyword's line, as some writers put them.
+    assert_eq!(
+        load(&write("inline.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
+            .unwrap()
+            .triangle_count(),
+        1
+    );
+    for (name, text, line) in [
+        ("magic.off", "PLY\n", 1),
+        ("counts.off", "OFF\nthree 1 0\n", 2),
+        ("vertex.off", "OFF\n3 1 0\n0 0 0\n1 nope 0\n0 1 0\n3 0 1 2\n", 4),
+        ("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", 6),
+        ("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n", 6),
+        ("huge.off", "OFF\n4000000000 1 0\n0 0 0\n", 2),
+    ] {
+        let e = load(&write(name, text)).unwrap_err();
+        assert_eq!(parse_line(e), line, "{name}");
+    }
+}
+
 #[test]
 fn mutated_files_never_panic() {
     let path = cbox();

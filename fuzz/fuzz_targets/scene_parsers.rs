@@ -1,8 +1,8 @@
-//! Mitsuba XML, OBJ + MTL and PLY from arbitrary bytes: errors only, no
+//! Mitsuba XML, OBJ + MTL, PLY and OFF from arbitrary bytes: errors only, no
 //! panic, no endless read, no unbounded allocation (run with libFuzzer's
 //! `-rss_limit_mb` and `-malloc_limit_mb`).
 //!
-//! Input: byte 0 picks the main file's format (xml, obj, ply by `% 3`); the
+//! Input: byte 0 picks the main file's format (xml, obj, ply, off by `% 4`); the
 //! rest is split at `\n@@\n` into the main file and up to three files it may
 //! refer to, `a.ply`, `a.obj` and `m.mtl`, all written to a scratch
 //! directory (the seeds in `fuzz/corpus/scene_parsers` use them).
@@ -32,7 +32,7 @@ fuzz_target!(|data: &[u8]| {
     let Some((&kind, rest)) = data.split_first() else {
         return;
     };
-    let ext = ["xml", "obj", "ply"][kind as usize % 3];
+    let ext = ["xml", "obj", "ply", "off"][kind as usize % 4];
     let dir = std::env::temp_dir().join(format!("pbgi-fuzz-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);
     let parts = split(rest);

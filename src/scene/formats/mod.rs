@@ -1,13 +1,14 @@
 //! Scene files: a subset of Mitsuba 3 XML (large enough for real scenes), OBJ +
-//! MTL and PLY. Anything read but not supported is named in
+//! MTL, PLY and OFF. Anything read but not supported is named in
 //! [`Scene::warnings`]; malformed input is a [`SceneError`] with file and line.
 //!
 //! Data enters as a path; it leaves as a validated [`Scene`]. One file per
-//! format (`mitsuba`, `obj`, `ply`), and `common` for what they share.
+//! format (`mitsuba`, `obj`, `ply`, `off`), and `common` for what they share.
 
 mod common;
 mod mitsuba;
 mod obj;
+mod off;
 mod ply;
 
 use std::collections::HashMap;
@@ -18,11 +19,12 @@ use glam::Vec3;
 use common::single_file;
 use mitsuba::mitsuba;
 pub use obj::{MISSING_MTL_GREY, ObjFile, read_obj};
+pub use off::read_off;
 pub use ply::read_ply;
 
 use super::{Material, Scene, SceneError};
 
-/// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`).
+/// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`, `.off`).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     load_with(path, &HashMap::new())
 }
@@ -42,30 +44,35 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
             s.warnings.extend(obj.warnings);
             s
         }
-        "ply" => {
-            let mesh = read_ply(path)?;
-            let mut warnings = vec![format!(
-                "{}: a bare mesh: default material and camera",
-                path.display()
-            )];
-            if mesh.emission.is_some() {
-                warnings.clear();
-            }
-            let mut s = single_file(
-                path,
-                (vec![mesh], vec![Material::diffuse("default", Vec3::splat(0.5))]),
-            )?;
-            s.warnings.append(&mut warnings);
-            s
+        "ply" => bare_mesh(path, read_ply(path)?, Vec::new())?,
+        "off" => {
+            let (mesh, warnings) = read_off(path)?;
+            bare_mesh(path, mesh, warnings)?
         }
         _ => {
             return Err(SceneError::Unsupported {
                 path: path.to_path_buf(),
                 line: 0,
-                what: format!("file type {ext:?} (expected .xml, .obj or .ply)"),
+                what: format!("file type {ext:?} (expected .xml, .obj, .ply or .off)"),
             });
         }
     };
     scene.validate()?;
     Ok(scene)
+}
+
+/// A scene around a mesh file that names no material, camera or light.
+fn bare_mesh(path: &Path, mesh: super::Mesh, mut warnings: Vec<String>) -> Result<Scene, SceneError> {
+    if mesh.emission.is_none() {
+        warnings.insert(
+            0,
+            format!("{}: a bare mesh: default material and camera", path.display()),
+        );
+    }
+    let mut s = single_file(
+        path,
+        (vec![mesh], vec![Material::diffuse("default", Vec3::splat(0.5))]),
+    )?;
+    s.warnings.append(&mut warnings);
+    Ok(s)
 }
