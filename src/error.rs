@@ -90,6 +90,14 @@ pub enum Error {
         /// The text given.
         value: String,
     },
+    /// A texel of an environment map (its index, row by row), or a uniform
+    /// sky's radiance (index 0), is invalid.
+    InvalidEnvironment {
+        /// The texel.
+        index: usize,
+        /// What is wrong with it.
+        reason: Invalid,
+    },
     /// More receivers (or microbuffers) than one call takes: a
     /// [`PacketCut`](crate::microbuffer::PacketCut) and
     /// [`shade_packet`](crate::microbuffer::shade_packet) hold one packet.
@@ -137,6 +145,7 @@ impl fmt::Display for Error {
                 f,
                 "unknown traversal scheme {value:?} (expected scalar, single, packet or hybrid)"
             ),
+            Error::InvalidEnvironment { index, reason } => write!(f, "environment texel {index}: {reason}"),
             Error::TooManyReceivers { given, most } => {
                 write!(
                     f,

@@ -90,6 +90,7 @@ pub mod tree;
 pub mod cut;
 
 pub mod brdf;
+pub mod environment;
 pub mod microbuffer;
 mod polygon;
 

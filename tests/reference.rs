@@ -81,6 +81,7 @@ fn floor_under_sky(rho: f32, l: f32) -> Scene {
         meshes: vec![quad(0.0, false, None), quad(1.0, true, Some(Vec3::splat(l)))],
         materials: vec![Material::diffuse("floor", Vec3::splat(rho))],
         lights: vec![],
+        environment: None,
         camera: Camera {
             origin: Vec3::new(0.0, 0.5, 0.0),
             target: Vec3::new(0.0, 0.0, 0.001),

@@ -218,15 +218,10 @@ fn form_factor(p: Vec3, n: Vec3, poly: &[Vec3]) -> f64 {
     0.5 * sum.abs() / std::f64::consts::PI
 }
 
-/// Ambient occlusion on whole renders, against an exact value: the floor of
-/// an open box (2 × 2, walls 1 high) seen from above through its opening.
-/// What a pixel shows in AO mode, `1 − AO`, is there the form factor of the
-/// opening from the floor point the pixel sees. The relative RMSE over those
-/// pixels is held to the gather-convergence target at the defaults (3 %), the
-/// mean to 1 %.
-#[test]
-fn occlusion_images_match_the_open_box_form_factor() {
-    let (h, corners) = (1.0f32, [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]);
+/// An open box (2 × 2 floor, walls 1 high, no lid), white (albedo 0.8),
+/// unlit, seen from above through its opening.
+fn open_box() -> Scene {
+    let (h, corners) = (OPEN_BOX_HEIGHT, OPEN_BOX_CORNERS);
     let at = |(x, z): (f32, f32), y: f32| Vec3::new(x, y, z);
     let inside = Vec3::new(0.0, 0.5 * h, 0.0);
     let quad = |name: &str, mut q: [Vec3; 4]| {
@@ -250,11 +245,12 @@ fn occlusion_images_match_the_open_box_form_factor() {
             [at(a, 0.0), at(b, 0.0), at(b, h), at(a, h)],
         ));
     }
-    let scene = Scene {
+    Scene {
         name: "open-box".into(),
         meshes,
         materials: vec![Material::diffuse("white", Vec3::splat(0.8))],
         lights: vec![],
+        environment: None,
         camera: Camera {
             origin: Vec3::new(0.0, 4.0, 0.0),
             target: Vec3::ZERO,
@@ -265,42 +261,135 @@ fn occlusion_images_match_the_open_box_form_factor() {
             height: 32,
         },
         warnings: vec![],
-    };
-    let out = render(
-        &scene,
-        &RenderOptions {
-            ao: true,
-            ..Default::default()
-        },
-        &|_, _| {},
-    )
-    .unwrap();
-    let opening = corners.map(|c| at(c, h));
-    let (mut err2, mut exact2, mut sum, mut exact_sum, mut n) = (0.0, 0.0, 0.0, 0.0, 0);
-    for y in 0..32u32 {
-        for x in 0..32u32 {
-            // The floor point under the pixel's centre, kept off the walls
-            // (where a pixel's footprint would straddle floor and wall).
-            let d = scene.camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-            let p = scene.camera.origin + d * (-scene.camera.origin.y / d.y);
-            if p.x.abs().max(p.z.abs()) > 0.9 {
-                continue;
+    }
+}
+
+const OPEN_BOX_HEIGHT: f32 = 1.0;
+const OPEN_BOX_CORNERS: [(f32, f32); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+
+/// The floor points the pixels' centres see (pixel index, point), kept off
+/// the walls (where a pixel's footprint would straddle floor and wall).
+fn floor_points(scene: &Scene) -> Vec<(usize, Vec3)> {
+    let cam = &scene.camera;
+    let mut out = Vec::new();
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+            let p = cam.origin + d * (-cam.origin.y / d.y);
+            if p.x.abs().max(p.z.abs()) <= 0.9 {
+                out.push(((y * cam.width + x) as usize, p));
             }
-            let exact = form_factor(p, Vec3::Y, &opening);
-            let got = out.image.pixels[(y * 32 + x) as usize].x as f64;
-            err2 += (got - exact).powi(2);
-            exact2 += exact * exact;
-            sum += got;
-            exact_sum += exact;
-            n += 1;
         }
     }
-    let (rel_rmse, bias) = ((err2 / exact2).sqrt(), sum / exact_sum - 1.0);
+    out
+}
+
+/// Relative RMSE and bias of `image`'s red channel against `exact(p)` over
+/// the [`floor_points`]; and their count.
+fn against_the_floor(
+    scene: &Scene,
+    image: &pbgi::render::Image,
+    exact: impl Fn(Vec3) -> f64,
+) -> (f64, f64, usize) {
+    let (mut err2, mut exact2, mut sum, mut exact_sum) = (0.0, 0.0, 0.0, 0.0);
+    let points = floor_points(scene);
+    for &(i, p) in &points {
+        let want = exact(p);
+        let got = image.pixels[i].x as f64;
+        err2 += (got - want).powi(2);
+        exact2 += want * want;
+        sum += got;
+        exact_sum += want;
+    }
+    ((err2 / exact2).sqrt(), sum / exact_sum - 1.0, points.len())
+}
+
+/// The opening's form factor from floor point `p` (Lambert's formula).
+fn opening_seen_from(p: Vec3) -> f64 {
+    let opening = OPEN_BOX_CORNERS.map(|(x, z)| Vec3::new(x, OPEN_BOX_HEIGHT, z));
+    form_factor(p, Vec3::Y, &opening)
+}
+
+/// Ambient occlusion on whole renders, against an exact value: the floor of
+/// the open box seen through its opening. What a pixel shows in AO mode,
+/// `1 − AO`, is there the form factor of the opening from the floor point
+/// the pixel sees. The relative RMSE over those pixels is held to the
+/// gather-convergence target at the defaults (3 %), the mean to 1 %.
+#[test]
+fn occlusion_images_match_the_open_box_form_factor() {
+    let scene = open_box();
+    let opts = RenderOptions {
+        ao: true,
+        ..Default::default()
+    };
+    let out = render(&scene, &opts, &|_, _| {}).unwrap();
+    let (rel_rmse, bias, n) = against_the_floor(&scene, &out.image, opening_seen_from);
     eprintln!("open box, {n} floor pixels: 1 − AO relative RMSE {rel_rmse:.4}, bias {bias:+.4}");
     assert!(n > 400, "{n} floor pixels");
     assert!(
         rel_rmse <= 0.03 && bias.abs() <= 0.01,
         "relative RMSE {rel_rmse}, bias {bias}"
+    );
+}
+
+/// Environment light through the microbuffer's open pixels, against an
+/// exact value: the open box under a uniform sky of radiance L, no other
+/// light, no bounce. A floor point sees the sky only through the opening, so
+/// it reflects `ρ/π · πL·F = ρ L F`, F the opening's form factor. Held to the
+/// same 3 % / 1 % as occlusion. The path tracer's paths leave through the
+/// opening with probability F (cosine sampling), so its relative RMSE is
+/// about `√(Σ F(1 − F)/spp / Σ F²)`: held to 1.25× that, its bias to 4× that
+/// over √pixels. Camera rays that miss see the sky in both.
+#[test]
+fn a_uniform_sky_lights_the_open_box_by_the_form_factor_of_its_opening() {
+    let (rho, l) = (0.8, 1.5);
+    let mut scene = open_box();
+    scene.environment = Some(pbgi::environment::Environment::uniform(Vec3::splat(l)).unwrap());
+    scene.camera.fov_degrees = 40.0; // the sky around the box in the corners
+    let opts = RenderOptions {
+        bounces: 0,
+        ..Default::default()
+    };
+    let out = render(&scene, &opts, &|_, _| {}).unwrap();
+    let exact = |p: Vec3| (rho * l) as f64 * opening_seen_from(p);
+    let (rel_rmse, bias, n) = against_the_floor(&scene, &out.image, exact);
+    eprintln!(
+        "open box under a sky, {n} floor pixels: point-based relative RMSE {rel_rmse:.4}, bias {bias:+.4}"
+    );
+    assert!(n > 300, "{n} floor pixels");
+    assert!(
+        rel_rmse <= 0.03 && bias.abs() <= 0.01,
+        "point-based: relative RMSE {rel_rmse}, bias {bias}"
+    );
+    assert_eq!(out.image.pixels[0], Vec3::splat(l), "a corner pixel sees the sky");
+    let spp = 256;
+    let traced = pbgi::render::render_reference(
+        &scene,
+        &pbgi::render::ReferenceOptions {
+            spp,
+            bounces: 0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let f: Vec<f64> = floor_points(&scene)
+        .iter()
+        .map(|&(_, p)| opening_seen_from(p))
+        .collect();
+    let noise =
+        (f.iter().map(|f| f * (1.0 - f)).sum::<f64>() / spp as f64 / f.iter().map(|f| f * f).sum::<f64>())
+            .sqrt();
+    let (rel_rmse, bias, n) = against_the_floor(&scene, &traced.image, exact);
+    eprintln!("path tracer: relative RMSE {rel_rmse:.4} (noise {noise:.4}), bias {bias:+.4}");
+    assert!(
+        rel_rmse <= 1.25 * noise && bias.abs() <= 4.0 * noise / (n as f64).sqrt(),
+        "path tracer: relative RMSE {rel_rmse}, bias {bias}, noise {noise}"
+    );
+    assert_eq!(
+        traced.image.pixels[0],
+        Vec3::splat(l),
+        "a corner pixel sees the sky"
     );
 }
 

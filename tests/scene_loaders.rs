@@ -259,6 +259,63 @@ fn off_meshes_and_their_errors() {
     }
 }
 
+/// Mitsuba's `constant` and `envmap` emitters become the scene's
+/// environment; a file with no light at all gets the default sky and sun,
+/// with a warning, and renders lit.
+#[test]
+fn environment_emitters_and_unlit_files() {
+    use pbgi::environment::Environment;
+    use pbgi::scene::{DEFAULT_SKY, Light};
+    let rect = r#"<shape type="rectangle"/>"#;
+    let xml = format!(
+        r#"<scene version="3.0.0"><emitter type="constant"><rgb name="radiance" value="0.5 0.6 0.7"/></emitter>{rect}</scene>"#
+    );
+    let s = load(&write("sky.xml", &xml)).unwrap();
+    assert_eq!(
+        s.environment,
+        Some(Environment::Uniform(glam::Vec3::new(0.5, 0.6, 0.7)))
+    );
+    assert!(s.lights.is_empty(), "a sky is a light: no default sun");
+    // An equirectangular map: 4 × 2, the top row brighter.
+    let exr = write("sky.exr", "");
+    exr::prelude::write_rgb_file(&exr, 4, 2, |_, y| {
+        if y == 0 {
+            (4.0f32, 4.0f32, 4.0f32)
+        } else {
+            (1.0, 1.0, 1.0)
+        }
+    })
+    .unwrap();
+    let xml = format!(
+        r#"<scene version="3.0.0"><emitter type="envmap"><string name="filename" value="sky.exr"/><float name="scale" value="0.5"/></emitter>{rect}</scene>"#
+    );
+    let s = load(&write("map.xml", &xml)).unwrap();
+    let env = s.environment.expect("an environment");
+    assert_eq!(env.radiance(glam::Vec3::Y), glam::Vec3::splat(2.0));
+    assert_eq!(env.radiance(-glam::Vec3::Y), glam::Vec3::splat(0.5));
+    let missing = format!(
+        r#"<scene version="3.0.0"><emitter type="envmap"><string name="filename" value="nowhere.exr"/></emitter>{rect}</scene>"#
+    );
+    let e = load(&write("nomap.xml", &missing)).unwrap_err();
+    assert!(e.to_string().contains("nowhere.exr"), "{e}");
+    // No light at all: a default sky and sun, said so.
+    let text = "OFF\n4 2 0\n-1 0 -1\n1 0 -1\n1 0 1\n-1 0 1\n3 0 2 1\n3 0 3 2\n";
+    let s = load(&write("unlit.off", text)).unwrap();
+    assert_eq!(s.environment, Some(Environment::Uniform(DEFAULT_SKY)));
+    assert!(s.lights.iter().any(|l| matches!(l, Light::Directional { .. })));
+    assert!(
+        s.warnings.iter().any(|w| w.contains("default sky")),
+        "{:?}",
+        s.warnings
+    );
+    let mut small = s.clone();
+    small.camera.width = 16;
+    small.camera.height = 16;
+    let out = pbgi::render::render(&small, &pbgi::render::RenderOptions::default(), &|_, _| {}).unwrap();
+    let mean = out.image.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / out.image.pixels.len() as f32;
+    assert!(mean > 0.1, "mean {mean}: not lit");
+}
+
 #[test]
 fn mutated_files_never_panic() {
     let path = cbox();

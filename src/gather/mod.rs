@@ -66,6 +66,7 @@ mod order;
 mod packets;
 
 use std::fmt;
+use std::sync::Arc;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -74,6 +75,7 @@ pub use packets::Gatherer;
 
 use crate::brdf::GlossyLobe;
 use crate::cut::{CutOptions, Receiver, Scheme, SchemeChoice, Traversal};
+use crate::environment::Environment;
 use crate::error::{Error, Invalid};
 use crate::microbuffer::{Convolution, MicroBuffer};
 use crate::simd::{Isa, LANES};
@@ -96,7 +98,7 @@ pub enum ReceiverOrder {
 }
 
 /// Settings of a [`Gather`]. The defaults are the renderer's.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct GatherOptions {
     /// The cut's parameters: Ω, the hybrid threshold, the instruction-set path.
     pub cut: CutOptions,
@@ -108,6 +110,9 @@ pub struct GatherOptions {
     pub scheme: SchemeChoice,
     /// How the receivers are grouped into packets.
     pub order: ReceiverOrder,
+    /// What a receiver sees where the cut leaves its hemisphere open (the
+    /// microbuffer's uncovered pixels); `None`: black.
+    pub environment: Option<Arc<Environment>>,
 }
 
 impl Default for GatherOptions {
@@ -117,6 +122,7 @@ impl Default for GatherOptions {
             microbuffer: 24,
             scheme: SchemeChoice::Auto,
             order: ReceiverOrder::Unordered,
+            environment: None,
         }
     }
 }
@@ -191,7 +197,7 @@ impl<'t> Gather<'t> {
     /// path this CPU does not run, a microbuffer resolution out of range.
     pub fn new(tree: &'t Tree, opts: &GatherOptions) -> Result<Self, Error> {
         let traversal = Traversal::new(tree, opts.cut)?;
-        let proto = MicroBuffer::new(opts.microbuffer)?;
+        let proto = MicroBuffer::new(opts.microbuffer)?.with_environment(opts.environment.clone());
         let scheme = opts.scheme.resolve(LANES);
         let pipeline = match opts.scheme {
             SchemeChoice::Fixed(Scheme::Scalar) => Pipeline::Scalar,
@@ -206,7 +212,7 @@ impl<'t> Gather<'t> {
         Ok(Gather {
             traversal,
             proto,
-            opts: *opts,
+            opts: opts.clone(),
             path,
         })
     }

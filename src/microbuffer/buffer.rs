@@ -11,6 +11,7 @@ use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
 use super::table::Table;
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
+use crate::environment::Environment;
 use crate::error::Error;
 use crate::simd::{F32s, LANES};
 use crate::tree::{NodeId, SplatRecord, Tree};
@@ -43,6 +44,8 @@ pub struct MicroBuffer {
     pub(super) frame: [Vec3; 3],
     /// What the splats left in the pixels.
     pub(super) frags: Fragments,
+    /// What the open pixels see (none: black).
+    pub(super) environment: Option<Arc<Environment>>,
 }
 
 impl MicroBuffer {
@@ -65,7 +68,16 @@ impl MicroBuffer {
             position: Vec3::ZERO,
             frame: [Vec3::X, Vec3::Y, Vec3::Z],
             frags: Fragments::default(),
+            environment: None,
         })
+    }
+
+    /// This buffer, its open pixels (what no splat covers) seeing
+    /// `environment` in [`irradiance`](Self::irradiance) and
+    /// [`glossy`](Self::glossy); `None`: black.
+    pub fn with_environment(mut self, environment: Option<Arc<Environment>>) -> Self {
+        self.environment = environment;
+        self
     }
 
     /// The resolution N.
@@ -182,16 +194,26 @@ impl MicroBuffer {
     /// a shading pipeline compiles it with its own instruction set).
     #[inline(always)]
     pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
-        compose::irradiance(&self.table, &self.frags, tree)
+        compose::irradiance(&self.table, &self.frags, tree, self.sky().as_ref())
+    }
+
+    /// What the open pixels see: the environment's radiance toward each
+    /// pixel's centre, and its largest radiance.
+    fn sky(&self) -> Option<(impl Fn(usize) -> Vec3 + '_, Vec3)> {
+        let env = self.environment.as_deref()?;
+        Some((
+            move |p: usize| env.radiance(self.to_world(self.table.dir[p])),
+            env.max_radiance(),
+        ))
     }
 
     /// Glossy reflection towards `wo` (world, unit):
-    /// `Σ L·f_s(ωi, ωo)·∫cosθ dω` over the composed pixels, `ωi` the pixel centre.
+    /// `Σ L·f_s(ωi, ωo)·∫cosθ dω` over the composed pixels (and the
+    /// environment through the open ones), `ωi` the pixel centre.
     pub fn glossy(&self, tree: &Tree, wo: Vec3, lobe: &GlossyLobe) -> Vec3 {
         let n = self.frame[2];
-        compose::reflected(&self.table, &self.frags, tree, |p| {
-            lobe.eval(n, wo, self.to_world(self.table.dir[p]))
-        })
+        let f = |p: usize| lobe.eval(n, wo, self.to_world(self.table.dir[p]));
+        compose::reflected(&self.table, &self.frags, tree, f, self.sky().as_ref())
     }
 
     /// Ambient occlusion: the covered fraction of the cosine-weighted

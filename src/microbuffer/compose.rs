@@ -182,19 +182,39 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
     }
     out
 }
-/// Irradiance `Σ radiance·∫cos dω` over the pixels, in pixel order, at
-/// most `π` times the brightest radiance splatted: the unclamped layers of a
-/// receiver enclosed by surfaces whose splats overlap may cover a little
-/// more than the hemisphere, and where that radiance is uniform the exact
-/// answer is the bound itself.
+/// Irradiance `Σ radiance·∫cos dω` over the pixels, in pixel order, plus
+/// what `sky` (radiance toward pixel `p`, and its largest) sends through the
+/// open part `1 − coverage` of the pixels; at most `π` times the brightest
+/// radiance splatted or seen: the unclamped layers of a receiver enclosed by
+/// surfaces whose splats overlap may cover a little more than the
+/// hemisphere, and where that radiance is uniform the exact answer is the
+/// bound itself.
 #[inline(always)]
-pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree) -> Vec3 {
+pub(crate) fn irradiance(
+    t: &Table,
+    frags: &Fragments,
+    tree: &Tree,
+    sky: Option<&(impl Fn(usize) -> Vec3, Vec3)>,
+) -> Vec3 {
     let c = compose(t, frags, tree, true);
     let mut e = Vec3::ZERO;
     for (l, w) in c.radiance.iter().zip(&t.cos_weight) {
         e += *l * *w;
     }
-    e.min(c.brightest * std::f32::consts::PI)
+    let mut brightest = c.brightest;
+    if let Some((sky, max)) = sky {
+        // Unclamped per pixel: the layers' coverage overshoots one in some
+        // pixels as it falls short in others (splats do not tile exactly),
+        // and only the sum is right, as occlusion's is; an enclosed
+        // receiver's sum may dip below zero, where no sky is seen.
+        let mut open = Vec3::ZERO;
+        for (p, (cover, w)) in c.cover.iter().zip(&t.cos_weight).enumerate() {
+            open += sky(p) * ((1.0 - cover) * w);
+        }
+        e += open.max(Vec3::ZERO);
+        brightest = brightest.max(*max);
+    }
+    e.min(brightest * std::f32::consts::PI)
 }
 
 /// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
@@ -209,14 +229,29 @@ pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree) -> f32 {
 }
 
 /// `Σ radiance·f(ωi)·∫cos dω` with `f` evaluated at each pixel's centre
-/// direction (`wi(p)`, world space).
-pub(crate) fn reflected(t: &Table, frags: &Fragments, tree: &Tree, f: impl Fn(usize) -> Vec3) -> Vec3 {
+/// direction (`wi(p)`, world space), and `sky` through the open part of
+/// each pixel as in [`irradiance`].
+pub(crate) fn reflected(
+    t: &Table,
+    frags: &Fragments,
+    tree: &Tree,
+    f: impl Fn(usize) -> Vec3,
+    sky: Option<&(impl Fn(usize) -> Vec3, Vec3)>,
+) -> Vec3 {
     let c = compose(t, frags, tree, true);
     let mut e = Vec3::ZERO;
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {
             e += *l * f(p) * *w;
         }
+    }
+    if let Some((sky, _)) = sky {
+        // As in `irradiance`: unclamped per pixel, the sum at least zero.
+        let mut open = Vec3::ZERO;
+        for (p, (cover, w)) in c.cover.iter().zip(&t.cos_weight).enumerate() {
+            open += sky(p) * f(p) * ((1.0 - cover) * w);
+        }
+        e += open.max(Vec3::ZERO);
     }
     e
 }

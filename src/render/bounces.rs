@@ -3,10 +3,8 @@
 
 use glam::Vec3;
 
-use super::options::RenderOptions;
-use crate::cut::{Scheme, SchemeChoice};
 use crate::error::Error;
-use crate::gather::{Gather, GatherOptions, ReceiverOrder};
+use crate::gather::{Gather, GatherOptions};
 use crate::points::{PointCloud, Surfel};
 use crate::tree::Tree;
 
@@ -17,19 +15,9 @@ pub(super) fn gather_bounce(
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
-    scheme: Scheme,
-    opts: &RenderOptions,
+    opts: &GatherOptions,
 ) -> Result<PointCloud, Error> {
-    let gather = Gather::new(
-        tree,
-        &GatherOptions {
-            cut: opts.cut,
-            microbuffer: opts.microbuffer,
-            scheme: SchemeChoice::Fixed(scheme),
-            // Tree order: neighbours, as in `Frame::shade`'s tiles.
-            order: ReceiverOrder::Coherent,
-        },
-    )?;
+    let gather = Gather::new(tree, opts)?;
     let surfels = cloud.surfels();
     // The receivers sit a hair above their surfel so it does not see itself edge-on.
     let receivers: Vec<(Vec3, Vec3)> = surfels

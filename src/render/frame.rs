@@ -2,6 +2,7 @@
 //! paper's `pre.`), then per 4×4-pixel tile and camera sample the packet of
 //! receivers, its direct light, its cuts, splatting and convolution.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -17,10 +18,11 @@ use super::output::{RenderError, RenderOutput, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
 use super::trace::Tracer;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
+use crate::environment::Environment;
 use crate::error::Error;
 use crate::gather::{Gather, GatherOptions, Gatherer, ReceiverOrder};
 use crate::microbuffer::Convolution;
-use crate::points::PointCloud;
+use crate::points::{PointCloud, Surfel};
 use crate::rng::Rng;
 use crate::scene::Scene;
 use crate::simd::LANES;
@@ -64,6 +66,25 @@ pub struct Frame<'s> {
     pub(crate) pre: f64,
     pub(crate) stages: Vec<Stage>,
     needs_points: bool,
+    /// What the open part of a receiver's hemisphere sees, and camera rays
+    /// that leave the scene (none in AO mode).
+    environment: Option<Arc<Environment>>,
+}
+
+/// The gather options of a render: its cut, microbuffer and environment,
+/// over coherent packets (screen tiles; surfels in tree order).
+fn gather_options(
+    opts: &RenderOptions,
+    scheme: SchemeChoice,
+    environment: &Option<Arc<Environment>>,
+) -> GatherOptions {
+    GatherOptions {
+        cut: opts.cut,
+        microbuffer: opts.microbuffer,
+        scheme,
+        order: ReceiverOrder::Coherent,
+        environment: environment.clone(),
+    }
 }
 
 impl<'s> Frame<'s> {
@@ -81,7 +102,14 @@ impl<'s> Frame<'s> {
         }
         crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
         let mut stages = Vec::new();
-        let needs_points = opts.ao || opts.bounces > 0;
+        let environment = if opts.ao {
+            None
+        } else {
+            scene.environment.clone().map(Arc::new)
+        };
+        // The environment's light arrives through the gather: it needs the
+        // surfels (as occluders) even without bounces.
+        let needs_points = opts.ao || opts.bounces > 0 || environment.is_some();
         let scheme = opts.scheme.resolve(LANES);
 
         let t_pre = Instant::now();
@@ -98,11 +126,33 @@ impl<'s> Frame<'s> {
                 name: "surfels + direct light at surfels",
                 skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
             });
-            let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+            let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
+            let mut direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
             let mut cloud = baked.cloud;
+            if environment.is_some() {
+                // The environment's light at the surfels, gathered with the
+                // surfels as occluders only (no radiance of their own): with
+                // no bounce, the receivers see only that occlusion.
+                let dark = PointCloud::new(
+                    cloud
+                        .surfels()
+                        .iter()
+                        .map(|s| Surfel {
+                            radiance: Vec3::ZERO,
+                            ..*s
+                        })
+                        .collect(),
+                )?;
+                if opts.bounces == 0 {
+                    cloud = dark;
+                } else {
+                    cloud = gather_bounce(&dark, &direct, &baked.albedo, &Tree::build(&dark), &gopts)?;
+                    direct = cloud.surfels().iter().map(|s| s.radiance).collect();
+                }
+            }
             let mut tree = Tree::build(&cloud);
             for _ in 1..opts.bounces.max(1) {
-                cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, scheme, opts)?;
+                cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts)?;
                 tree = Tree::build(&cloud);
             }
             stages.push(Stage {
@@ -148,6 +198,7 @@ impl<'s> Frame<'s> {
             pre,
             stages,
             needs_points,
+            environment,
         })
     }
 
@@ -175,15 +226,7 @@ impl<'s> Frame<'s> {
 
     /// [`gather`](Self::gather) with another scheme (for benchmarks).
     pub(crate) fn gather_with(&self, scheme: SchemeChoice) -> Result<Gather<'_>, Error> {
-        Gather::new(
-            &self.tree,
-            &GatherOptions {
-                cut: self.opts.cut,
-                microbuffer: self.opts.microbuffer,
-                scheme,
-                order: ReceiverOrder::Coherent,
-            },
-        )
+        Gather::new(&self.tree, &gather_options(&self.opts, scheme, &self.environment))
     }
 
     /// Number of 4×4-pixel tiles.
@@ -204,8 +247,15 @@ impl<'s> Frame<'s> {
     }
 
     /// One packet: camera sample `s` of each pixel of a tile (stratified over
-    /// the pixel), the rays that hit a visible surface.
-    pub(crate) fn packet(&self, pixels: &[(u32, u32)], s: u32) -> Vec<PacketPoint> {
+    /// the pixel), the rays that hit a visible surface. `misses` (if given)
+    /// gets the others: each pixel's index in the tile and the environment's
+    /// radiance along its ray.
+    pub(crate) fn packet(
+        &self,
+        pixels: &[(u32, u32)],
+        s: u32,
+        mut misses: Option<&mut Vec<(usize, Vec3)>>,
+    ) -> Vec<PacketPoint> {
         let cam = &self.scene.camera;
         let grid = (self.opts.spp as f32).sqrt().ceil() as u32;
         let mut points = Vec::with_capacity(pixels.len());
@@ -218,10 +268,17 @@ impl<'s> Frame<'s> {
             let fx = x as f32 + (sx as f32 + rng.f32()) / grid as f32;
             let fy = y as f32 + (sy as f32 + rng.f32()) / grid as f32;
             let dir = cam.ray_direction(fx, fy);
-            if let Some(hit) = self.tracer.closest(cam.origin, dir, f32::INFINITY)
-                && let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit)
-            {
-                points.push(PacketPoint { pixel: k, point, rng });
+            match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
+                Some(hit) => {
+                    if let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit) {
+                        points.push(PacketPoint { pixel: k, point, rng });
+                    }
+                }
+                None => {
+                    if let (Some(m), Some(env)) = (misses.as_deref_mut(), &self.environment) {
+                        m.push((k, env.radiance(dir)));
+                    }
+                }
             }
         }
         points
@@ -314,9 +371,18 @@ impl<'s> Frame<'s> {
                 let mut receivers_done = 0;
                 let pixels = self.tile_pixels(tile);
                 let mut sums = vec![Vec3::ZERO; pixels.len()];
+                let mut misses = Vec::new();
                 for s in 0..opts.spp {
                     let t0 = Instant::now();
-                    let mut points = self.packet(&pixels, s);
+                    misses.clear();
+                    let mut points = self.packet(&pixels, s, Some(&mut misses));
+                    // Camera rays that leave the scene see the environment
+                    // (light that bounced nowhere: direct).
+                    if opts.component != Component::Indirect {
+                        for &(k, l) in &misses {
+                            sums[k] += l;
+                        }
+                    }
                     let direct = self.direct(&mut points);
                     acc_direct.add(t0.elapsed().as_secs_f64());
                     receivers_done += points.len();

@@ -216,7 +216,17 @@ fn trace_path(
     let mut prev_pdf: Option<f32> = None;
     let mut depth = 0u32; // surface vertices so far
     let max_vertices = if bounces < 0 { u32::MAX } else { bounces as u32 + 1 };
-    while let Some(hit) = tracer.closest(origin, dir, f32::INFINITY) {
+    loop {
+        let Some(hit) = tracer.closest(origin, dir, f32::INFINITY) else {
+            // Left the scene: the environment, counted like an emitter hit
+            // by a BSDF sample (no light sample of it to weigh against).
+            if let Some(env) = &scene.environment
+                && component.holds(depth.saturating_sub(1))
+            {
+                radiance += throughput * env.radiance(dir);
+            }
+            break;
+        };
         let Some(sp) = shading_point(scene, tracer, origin, dir, &hit) else {
             break;
         };

@@ -225,7 +225,7 @@ pub fn bench(
         .flat_map_iter(|tile| {
             let pixels = frame.tile_pixels(tile);
             (0..frame.opts.spp)
-                .map(|s| frame.packet(&pixels, s))
+                .map(|s| frame.packet(&pixels, s, None))
                 .filter(|p| !p.is_empty())
                 .collect::<Vec<_>>()
         })

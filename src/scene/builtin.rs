@@ -91,6 +91,7 @@ pub fn cornell_box() -> Scene {
         meshes,
         materials,
         lights: Vec::new(),
+        environment: None,
         camera: Camera {
             origin: Vec3::new(0.0, 0.0, 3.9),
             target: Vec3::new(0.0, 0.0, 2.9),

@@ -223,6 +223,7 @@ pub(super) fn sponza(dir: &Path, bump: bool) -> Result<Scene, SceneError> {
         meshes,
         materials,
         lights,
+        environment: None,
         camera: Camera {
             origin: Vec3::new(-12.5, 2.0, -0.4) * k,
             target: Vec3::new(0.0, 4.2, 0.2) * k,
@@ -254,6 +255,7 @@ pub(super) fn cornell_box_embree(dir: &Path) -> Result<Scene, SceneError> {
         meshes,
         materials: obj.materials,
         lights: Vec::new(),
+        environment: None,
         camera: Camera {
             origin,
             target: origin + Vec3::Z,

@@ -114,6 +114,11 @@ pub struct Mesh {
     pub emission: Option<Vec3>,
 }
 
+/// The sky radiance [`Scene::light_if_unlit`] adds: a pale blue.
+pub const DEFAULT_SKY: Vec3 = Vec3::new(0.25, 0.3, 0.38);
+/// The sun irradiance [`Scene::light_if_unlit`] adds: warm white.
+pub const DEFAULT_SUN: Vec3 = Vec3::new(2.6, 2.4, 2.1);
+
 /// A light that is not a surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
@@ -215,6 +220,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Point and directional lights.
     pub lights: Vec<Light>,
+    /// Light from infinitely far: what rays leaving the scene, and the open
+    /// part of each receiver's hemisphere, see (`None`: black).
+    pub environment: Option<crate::environment::Environment>,
     /// The camera.
     pub camera: Camera,
     /// Everything the loader read but does not support, named (never dropped silently).
@@ -225,6 +233,37 @@ impl Scene {
     /// Total triangle count.
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Whether anything emits light: a light, an emitting mesh, an environment.
+    pub fn has_light(&self) -> bool {
+        !self.lights.is_empty()
+            || self.environment.is_some()
+            || self
+                .meshes
+                .iter()
+                .any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
+    }
+
+    /// A scene with no light at all gets a sky (uniform, [`DEFAULT_SKY`]) and
+    /// a sun ([`DEFAULT_SUN`] irradiance, from above and behind the camera's
+    /// right shoulder, by the camera's up), with a warning: a model without
+    /// lights renders lit, not black. Returns whether it added them.
+    pub fn light_if_unlit(&mut self) -> bool {
+        if self.has_light() {
+            return false;
+        }
+        let (forward, right, up) = self.camera.frame();
+        self.lights.push(Light::Directional {
+            direction: (-up + 0.5 * forward - 0.4 * right).normalize(),
+            irradiance: DEFAULT_SUN,
+        });
+        self.environment = Some(crate::environment::Environment::Uniform(DEFAULT_SKY));
+        self.warnings.push(format!(
+            "{}: no light, emitter or environment: lit by a default sky (radiance {DEFAULT_SKY}) and sun (irradiance {DEFAULT_SUN})",
+            self.name
+        ));
+        true
     }
 
     /// Whether any material has a glossy lobe.

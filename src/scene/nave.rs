@@ -546,6 +546,7 @@ pub fn nave() -> Scene {
             direction: Vec3::new(-0.35, -0.85, -0.4).normalize(),
             irradiance: Vec3::new(9.0, 8.2, 6.8),
         }],
+        environment: None,
         camera: Camera {
             origin: Vec3::new(0.0, 0.55, -0.2),
             target: Vec3::new(0.0, 0.95, -LENGTH),

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::environment::LatLong;
 use crate::scene::{Camera, FovAxis, Material, Mesh, Scene, SceneError};
 
 pub(super) fn parse_err(path: &Path, line: usize, message: impl Into<String>) -> SceneError {
@@ -58,6 +59,7 @@ pub(super) fn single_file(
         meshes,
         materials,
         lights: Vec::new(),
+        environment: None,
         camera: Camera {
             origin: center + Vec3::Z * (1.8 * size),
             target: center,
@@ -79,4 +81,27 @@ pub(super) fn stem(path: &Path) -> String {
         .and_then(|s| s.to_str())
         .unwrap_or("scene")
         .to_string()
+}
+
+/// An equirectangular HDR environment map (OpenEXR, RGB) times `scale`.
+pub(super) fn read_lat_long(path: &Path, scale: f32) -> Result<LatLong, SceneError> {
+    use exr::prelude::*;
+    regular_file(path)?;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![Vec3::ZERO; res.width() * res.height()]),
+        |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+        },
+    )
+    .map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        message: format!("environment map: {e}"),
+    })?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    let pixels = pixels.into_iter().map(|p| p * scale).collect();
+    LatLong::new(size.width(), size.height(), pixels).map_err(|e| SceneError::Invalid {
+        what: format!("{}: {e}", path.display()),
+    })
 }

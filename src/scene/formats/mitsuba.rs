@@ -10,6 +10,7 @@ use glam::{Mat4, Vec3};
 use super::common::{parse_err, read_text, single_file, stem};
 use super::obj::read_obj;
 use super::ply::read_ply;
+use crate::environment::Environment;
 use crate::scene::shapes::{cube_mesh, quad_mesh, sphere_mesh};
 use crate::scene::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError};
 
@@ -24,6 +25,7 @@ struct Mitsuba<'a> {
     materials: Vec<Material>,
     meshes: Vec<Mesh>,
     lights: Vec<Light>,
+    environment: Option<Environment>,
     camera: Option<Camera>,
 }
 
@@ -40,6 +42,7 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
         text: &text,
         params: overrides.clone(),
         warnings: Vec::new(),
+        environment: None,
         ignored: Vec::new(),
         bsdfs: HashMap::new(),
         materials: Vec::new(),
@@ -108,6 +111,7 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
         meshes: m.meshes,
         materials: m.materials,
         lights: m.lights,
+        environment: m.environment,
         camera,
         warnings: m.warnings,
     })
@@ -504,6 +508,27 @@ impl Mitsuba<'_> {
                     irradiance: self.color(node, "irradiance", Vec3::ONE)?,
                 });
             }
+            "constant" => {
+                let l = self.color(node, "radiance", Vec3::ONE)?;
+                let env = Environment::uniform(l).map_err(|e| self.err(node, e.to_string()))?;
+                self.set_environment(node, env);
+            }
+            "envmap" => {
+                let file = self
+                    .prop(node, "filename")
+                    .ok_or_else(|| self.err(node, "envmap without filename"))?;
+                let p = self.dir.join(self.attr(file, "value")?);
+                let scale = self.scalar_prop(node, "scale", 1.0)?;
+                let map = super::common::read_lat_long(&p, scale)?;
+                if node.children().any(|c| c.has_tag_name("transform")) {
+                    self.warnings.push(format!(
+                        "{}:{}: the envmap's to_world is not supported: the map is used unrotated (+Y up)",
+                        self.path.display(),
+                        self.line(node)
+                    ));
+                }
+                self.set_environment(node, Environment::LatLong(map));
+            }
             other => self.warnings.push(format!(
                 "{}:{}: emitter {other:?} not supported, skipped",
                 self.path.display(),
@@ -511,6 +536,18 @@ impl Mitsuba<'_> {
             )),
         }
         Ok(())
+    }
+
+    /// The scene's environment; a second one replaces the first, with a warning.
+    fn set_environment(&mut self, node: Node, env: Environment) {
+        if self.environment.is_some() {
+            self.warnings.push(format!(
+                "{}:{}: a second environment emitter replaces the first",
+                self.path.display(),
+                self.line(node)
+            ));
+        }
+        self.environment = Some(env);
     }
 
     fn sensor(&mut self, node: Node) -> Result<(), SceneError> {

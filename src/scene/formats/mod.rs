@@ -57,6 +57,8 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
             });
         }
     };
+    let mut scene = scene;
+    scene.light_if_unlit();
     scene.validate()?;
     Ok(scene)
 }
