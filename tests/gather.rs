@@ -111,13 +111,19 @@ fn an_environment_keeps_the_pipelines_bitwise_equal() {
     use pbgi::environment::{Environment, LatLong};
     use std::sync::Arc;
     let (tree, receivers) = scene();
-    let texels = (0..64 * 32).map(|i| Vec3::new((i % 64) as f32 / 64.0, (i / 64) as f32 / 32.0, 0.5)).collect();
+    let texels = (0..64 * 32)
+        .map(|i| Vec3::new((i % 64) as f32 / 64.0, (i / 64) as f32 / 32.0, 0.5))
+        .collect();
     let env = Arc::new(Environment::LatLong(LatLong::new(64, 32, texels).unwrap()));
     let with = |scheme, isa| GatherOptions {
         environment: Some(env.clone()),
         ..options(scheme, isa, ReceiverOrder::Unordered)
     };
-    let dark = Gather::new(&tree, &options(Scheme::Scalar, Isa::Portable, ReceiverOrder::Unordered)).unwrap();
+    let dark = Gather::new(
+        &tree,
+        &options(Scheme::Scalar, Isa::Portable, ReceiverOrder::Unordered),
+    )
+    .unwrap();
     let dark = dark.irradiance(&pairs(&receivers)).unwrap();
     let want = Gather::new(&tree, &with(Scheme::Scalar, Isa::Portable)).unwrap();
     let want = want.irradiance(&pairs(&receivers)).unwrap();
@@ -128,7 +134,12 @@ fn an_environment_keeps_the_pipelines_bitwise_equal() {
     for isa in Isa::available() {
         for scheme in Scheme::ALL {
             let g = Gather::new(&tree, &with(scheme, isa)).unwrap();
-            assert_eq!(bits(&g.irradiance(&pairs(&receivers)).unwrap()), bits(&want), "{}", g.path());
+            assert_eq!(
+                bits(&g.irradiance(&pairs(&receivers)).unwrap()),
+                bits(&want),
+                "{}",
+                g.path()
+            );
         }
     }
 }

@@ -225,6 +225,17 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// A uniform sky of this radiance ("R,G,B" or one value) for what the
+    /// scene leaves open; replaces the scene's environment.
+    #[arg(long, value_name = "RADIANCE")]
+    pub sky: Option<String>,
+    /// An equirectangular HDR environment map (.exr, +Y up) instead;
+    /// replaces the scene's environment.
+    #[arg(long, value_name = "FILE", conflicts_with = "sky")]
+    pub envmap: Option<PathBuf>,
+    /// Factor on the environment map's radiance.
+    #[arg(long, default_value_t = 1.0, requires = "envmap")]
+    pub envmap_scale: f32,
     #[command(flatten)]
     pub settings: Settings,
 }

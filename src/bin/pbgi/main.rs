@@ -82,7 +82,25 @@ fn tick(bar: &ProgressBar, done: usize, total: usize) {
 }
 
 fn cmd_render(a: &RenderArgs) -> Res<()> {
-    let scene = load_scene(&a.scene)?;
+    use pbgi::environment::Environment;
+    let mut scene = load_scene(&a.scene)?;
+    if let Some(sky) = &a.sky {
+        let v: Vec<f32> = sky
+            .split(',')
+            .map(|t| t.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("--sky {sky:?}: {e} (expected R,G,B or one value)"))?;
+        let l = match v[..] {
+            [x] => glam::Vec3::splat(x),
+            [r, g, b] => glam::Vec3::new(r, g, b),
+            _ => return Err(format!("--sky {sky:?}: expected R,G,B or one value").into()),
+        };
+        scene.environment = Some(Environment::uniform(l).map_err(|e| format!("--sky {sky:?}: {e}"))?);
+    }
+    if let Some(path) = &a.envmap {
+        let map = pbgi::scene::formats::read_lat_long(path, a.envmap_scale)?;
+        scene.environment = Some(Environment::LatLong(map));
+    }
     let opts = options(a)?;
     let out_path = a
         .output

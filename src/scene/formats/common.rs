@@ -84,7 +84,7 @@ pub(super) fn stem(path: &Path) -> String {
 }
 
 /// An equirectangular HDR environment map (OpenEXR, RGB) times `scale`.
-pub(super) fn read_lat_long(path: &Path, scale: f32) -> Result<LatLong, SceneError> {
+pub fn read_lat_long(path: &Path, scale: f32) -> Result<LatLong, SceneError> {
     use exr::prelude::*;
     regular_file(path)?;
     let image = read_first_rgba_layer_from_file(

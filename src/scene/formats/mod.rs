@@ -16,6 +16,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+pub use common::read_lat_long;
 use common::single_file;
 use mitsuba::mitsuba;
 pub use obj::{MISSING_MTL_GREY, ObjFile, read_obj};
@@ -63,7 +64,9 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
     Ok(scene)
 }
 
-/// A scene around a mesh file that names no material, camera or light.
+/// A scene around a mesh file that names no material, camera or light: a
+/// two-sided grey, a camera looking at it, and (through `load`) the default
+/// sky and sun when it has no light.
 fn bare_mesh(path: &Path, mesh: super::Mesh, mut warnings: Vec<String>) -> Result<Scene, SceneError> {
     if mesh.emission.is_none() {
         warnings.insert(
@@ -71,10 +74,12 @@ fn bare_mesh(path: &Path, mesh: super::Mesh, mut warnings: Vec<String>) -> Resul
             format!("{}: a bare mesh: default material and camera", path.display()),
         );
     }
-    let mut s = single_file(
-        path,
-        (vec![mesh], vec![Material::diffuse("default", Vec3::splat(0.5))]),
-    )?;
+    // A bare mesh's winding is anyone's guess: both sides reflect.
+    let material = Material {
+        two_sided: true,
+        ..Material::diffuse("default", Vec3::splat(0.5))
+    };
+    let mut s = single_file(path, (vec![mesh], vec![material]))?;
     s.warnings.append(&mut warnings);
     Ok(s)
 }
