@@ -1,8 +1,11 @@
 //! The whole chain (surfels → tree → cut → microbuffer → irradiance) against
 //! analytic irradiance, and bitwise identical shading for every scheme and path.
 
+mod common;
+
+use common::{Pipeline, irradiance_with};
 use glam::Vec3;
-use pbgi::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_cuts, shade_packet};
+use pbgi::microbuffer::{MicroBuffer, MicroBufferSink};
 use pbgi::{CutOptions, Isa, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 
 const L: f32 = 2.0;
@@ -55,42 +58,8 @@ fn irradiance_pipelines(
     scheme: Scheme,
     isa: Isa,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
-    let t = Traversal::new(
-        tree,
-        CutOptions {
-            max_solid_angle: omega,
-            isa: Some(isa),
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let (mut scalar, mut lanes) = (Vec::new(), Vec::new());
-    let mut cut = PacketCut::new(tree);
-    for chunk in receivers.chunks(16) {
-        let mut buffers = vec![MicroBuffer::new(res).unwrap(); chunk.len()];
-        let reset = |buffers: &mut Vec<MicroBuffer>| {
-            for (b, r) in buffers.iter_mut().zip(chunk) {
-                b.reset(r.position(), r.normal());
-            }
-        };
-        let mut out = vec![Vec3::NAN; chunk.len()];
-        reset(&mut buffers);
-        let cuts: Vec<Vec<u32>> = t.cuts(scheme, chunk).into_iter().map(|c| c.splats).collect();
-        shade_cuts(isa, &mut buffers, tree, &cuts, Convolution::Irradiance, &mut out).unwrap();
-        scalar.extend_from_slice(&out);
-        reset(&mut buffers);
-        t.run(scheme, chunk, &mut cut);
-        shade_packet(
-            isa,
-            &mut buffers,
-            tree,
-            &mut cut,
-            Convolution::Irradiance,
-            &mut out,
-        )
-        .unwrap();
-        lanes.extend_from_slice(&out);
-    }
+    let [scalar, lanes] = [Pipeline::Scalar, Pipeline::Lanes]
+        .map(|pipeline| irradiance_with(tree, receivers, omega, res, scheme, isa, pipeline).unwrap());
     (scalar, lanes)
 }
 

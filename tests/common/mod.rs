@@ -1058,6 +1058,35 @@ pub fn shade_with(
     isa: Isa,
     pipeline: Pipeline,
 ) -> Result<Vec<Shaded>, String> {
+    shade_pipeline(tree, receivers, omega, res, scheme, isa, pipeline, true)
+}
+
+/// [`shade_with`]'s irradiance alone (no occlusion or glossy pass: the
+/// high-resolution analytic cases).
+pub fn irradiance_with(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+    scheme: Scheme,
+    isa: Isa,
+    pipeline: Pipeline,
+) -> Result<Vec<Vec3>, String> {
+    let s = shade_pipeline(tree, receivers, omega, res, scheme, isa, pipeline, false)?;
+    Ok(s.iter().map(|s| s.irradiance).collect())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn shade_pipeline(
+    tree: &Tree,
+    receivers: &[Receiver],
+    omega: f32,
+    res: usize,
+    scheme: Scheme,
+    isa: Isa,
+    pipeline: Pipeline,
+    all: bool,
+) -> Result<Vec<Shaded>, String> {
     use pbgi::brdf::GlossyLobe;
     use pbgi::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
     let t = traversal(tree, omega, 2, isa)?;
@@ -1065,69 +1094,46 @@ pub fn shade_with(
     let mut out = Vec::with_capacity(receivers.len());
     for chunk in receivers.chunks(pbgi::LANES) {
         let mut buffers = vec![proto.clone(); chunk.len()];
-        let mut irradiance = vec![Vec3::ZERO; chunk.len()];
-        let mut occlusion = vec![Vec3::ZERO; chunk.len()];
-        let reset = |buffers: &mut [MicroBuffer]| {
-            for (b, r) in buffers.iter_mut().zip(chunk) {
-                b.reset(r.position(), r.normal());
-            }
-        };
+        // Each receiver's list (scalar pipeline) or the packet's cut (16 lanes).
+        let mut lists = Lists(vec![Vec::new(); chunk.len()]);
+        let mut cut = PacketCut::new(tree);
         match pipeline {
-            Pipeline::Scalar => {
-                let mut lists = Lists(vec![Vec::new(); chunk.len()]);
-                t.run(scheme, chunk, &mut lists);
-                reset(&mut buffers);
-                shade_cuts(
-                    isa,
-                    &mut buffers,
-                    tree,
-                    &lists.0,
-                    Convolution::Occlusion,
-                    &mut occlusion,
-                )
+            Pipeline::Scalar => t.run(scheme, chunk, &mut lists),
+            Pipeline::Lanes => t.run(scheme, chunk, &mut cut),
+        };
+        // Occlusion first: the buffers keep the irradiance pass's splats for glossy.
+        let whats = if all {
+            vec![Convolution::Occlusion, Convolution::Irradiance]
+        } else {
+            vec![Convolution::Irradiance]
+        };
+        let mut passes: Vec<Vec<Vec3>> = whats
+            .into_iter()
+            .map(|what| {
+                for (b, r) in buffers.iter_mut().zip(chunk) {
+                    b.reset(r.position(), r.normal());
+                }
+                let mut values = vec![Vec3::ZERO; chunk.len()];
+                match pipeline {
+                    Pipeline::Scalar => shade_cuts(isa, &mut buffers, tree, &lists.0, what, &mut values),
+                    Pipeline::Lanes => {
+                        shade_packet(isa, &mut buffers, tree, &mut cut.clone(), what, &mut values)
+                    }
+                }
                 .unwrap();
-                reset(&mut buffers);
-                shade_cuts(
-                    isa,
-                    &mut buffers,
-                    tree,
-                    &lists.0,
-                    Convolution::Irradiance,
-                    &mut irradiance,
-                )
-                .unwrap();
-            }
-            Pipeline::Lanes => {
-                let mut cut = PacketCut::new(tree);
-                t.run(scheme, chunk, &mut cut);
-                let mut again = cut.clone();
-                reset(&mut buffers);
-                shade_packet(
-                    isa,
-                    &mut buffers,
-                    tree,
-                    &mut again,
-                    Convolution::Occlusion,
-                    &mut occlusion,
-                )
-                .unwrap();
-                reset(&mut buffers);
-                shade_packet(
-                    isa,
-                    &mut buffers,
-                    tree,
-                    &mut cut,
-                    Convolution::Irradiance,
-                    &mut irradiance,
-                )
-                .unwrap();
-            }
-        }
+                values
+            })
+            .collect();
+        let irradiance = passes.pop().expect("the irradiance pass");
+        let occlusion = passes.pop().unwrap_or_else(|| vec![Vec3::ZERO; chunk.len()]);
         for (i, (b, r)) in buffers.iter().zip(chunk).enumerate() {
             let n = r.normal();
             let tangent = n.any_orthonormal_vector();
             let bitangent = n.cross(tangent);
             let glossy = GLOSSY_PROBES.map(|(roughness, [x, y, z])| {
+                if !all {
+                    return Vec3::ZERO;
+                }
                 let wo = (tangent * x + bitangent * y + n * z).normalize();
                 b.glossy(
                     tree,
