@@ -10,9 +10,11 @@ use glam::{Mat4, Vec3};
 use super::common::{parse_err, read_text, single_file, stem};
 use super::obj::read_obj;
 use super::ply::read_ply;
-use crate::environment::Environment;
 use crate::scene::shapes::{cube_mesh, quad_mesh, sphere_mesh};
 use crate::scene::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError};
+
+/// Emitters: lights, and the environment (`constant`, `envmap`).
+mod emitters;
 
 struct Mitsuba<'a> {
     path: &'a Path,
@@ -25,7 +27,7 @@ struct Mitsuba<'a> {
     materials: Vec<Material>,
     meshes: Vec<Mesh>,
     lights: Vec<Light>,
-    environment: Option<Environment>,
+    environment: Option<crate::environment::Environment>,
     camera: Option<Camera>,
 }
 
@@ -479,75 +481,6 @@ impl Mitsuba<'_> {
             self.meshes.push(mesh);
         }
         Ok(())
-    }
-
-    fn emitter(&mut self, node: Node) -> Result<(), SceneError> {
-        let ty = self.attr(node, "type")?;
-        let m = self.to_world(node)?;
-        match ty.as_str() {
-            "point" => {
-                let position = match self.prop(node, "position") {
-                    Some(p) => self.vec3(p, "value")?,
-                    None => m.transform_point3(Vec3::ZERO),
-                };
-                self.lights.push(Light::Point {
-                    position,
-                    intensity: self.color(node, "intensity", Vec3::ONE)?,
-                });
-            }
-            "directional" => {
-                let direction = match self.prop(node, "direction") {
-                    Some(p) => self.vec3(p, "value")?,
-                    None => m.transform_vector3(Vec3::Z),
-                };
-                if direction.length_squared() == 0.0 {
-                    return Err(self.err(node, "directional light with zero direction"));
-                }
-                self.lights.push(Light::Directional {
-                    direction: direction.normalize(),
-                    irradiance: self.color(node, "irradiance", Vec3::ONE)?,
-                });
-            }
-            "constant" => {
-                let l = self.color(node, "radiance", Vec3::ONE)?;
-                let env = Environment::uniform(l).map_err(|e| self.err(node, e.to_string()))?;
-                self.set_environment(node, env);
-            }
-            "envmap" => {
-                let file = self
-                    .prop(node, "filename")
-                    .ok_or_else(|| self.err(node, "envmap without filename"))?;
-                let p = self.dir.join(self.attr(file, "value")?);
-                let scale = self.scalar_prop(node, "scale", 1.0)?;
-                let map = super::common::read_lat_long(&p, scale)?;
-                if node.children().any(|c| c.has_tag_name("transform")) {
-                    self.warnings.push(format!(
-                        "{}:{}: the envmap's to_world is not supported: the map is used unrotated (+Y up)",
-                        self.path.display(),
-                        self.line(node)
-                    ));
-                }
-                self.set_environment(node, Environment::LatLong(map));
-            }
-            other => self.warnings.push(format!(
-                "{}:{}: emitter {other:?} not supported, skipped",
-                self.path.display(),
-                self.line(node)
-            )),
-        }
-        Ok(())
-    }
-
-    /// The scene's environment; a second one replaces the first, with a warning.
-    fn set_environment(&mut self, node: Node, env: Environment) {
-        if self.environment.is_some() {
-            self.warnings.push(format!(
-                "{}:{}: a second environment emitter replaces the first",
-                self.path.display(),
-                self.line(node)
-            ));
-        }
-        self.environment = Some(env);
     }
 
     fn sensor(&mut self, node: Node) -> Result<(), SceneError> {
