@@ -64,6 +64,7 @@ impl LatLong {
     }
 
     /// The texel `d` (unit) falls in.
+    #[inline(always)]
     fn lookup(&self, d: Vec3) -> Vec3 {
         let u = 0.5 + d.x.atan2(-d.z) * (0.5 * std::f32::consts::FRAC_1_PI);
         let v = d.y.clamp(-1.0, 1.0).acos() * std::f32::consts::FRAC_1_PI;
@@ -90,8 +91,9 @@ impl Environment {
         Ok(Environment::Uniform(radiance))
     }
 
-    /// Radiance arriving from direction `d` (unit, pointing away from the scene).
-    #[inline]
+    /// Radiance arriving from direction `d` (unit, pointing away from the
+    /// scene). Inlined: the shading kernels' clones call it.
+    #[inline(always)]
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         match self {
             Environment::Uniform(l) => *l,
@@ -100,6 +102,7 @@ impl Environment {
     }
 
     /// The largest radiance per channel.
+    #[inline(always)]
     pub fn max_radiance(&self) -> Vec3 {
         match self {
             Environment::Uniform(l) => *l,

@@ -197,14 +197,13 @@ impl MicroBuffer {
         compose::irradiance(&self.table, &self.frags, tree, self.sky().as_ref())
     }
 
-    /// What the open pixels see: the environment's radiance toward each
-    /// pixel's centre, and its largest radiance.
-    fn sky(&self) -> Option<(impl Fn(usize) -> Vec3 + '_, Vec3)> {
-        let env = self.environment.as_deref()?;
-        Some((
-            move |p: usize| env.radiance(self.to_world(self.table.dir[p])),
-            env.max_radiance(),
-        ))
+    /// What the open pixels see.
+    #[inline(always)]
+    fn sky(&self) -> Option<compose::Sky<'_>> {
+        Some(compose::Sky {
+            environment: self.environment.as_deref()?,
+            frame: self.frame,
+        })
     }
 
     /// Glossy reflection towards `wo` (world, unit):

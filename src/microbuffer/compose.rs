@@ -24,6 +24,7 @@ use glam::Vec3;
 
 use super::fragments::Fragments;
 use super::table::Table;
+use crate::environment::Environment;
 use crate::tree::Tree;
 
 /// How much of what lies behind a layer it hides per unit of coverage.
@@ -190,39 +191,58 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
 /// hemisphere, and where that radiance is uniform the exact answer is the
 /// bound itself.
 #[inline(always)]
-pub(crate) fn irradiance(
-    t: &Table,
-    frags: &Fragments,
-    tree: &Tree,
-    sky: Option<&(impl Fn(usize) -> Vec3, Vec3)>,
-) -> Vec3 {
-    let c = compose(t, frags, tree, true);
+pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree, sky: Option<&Sky>) -> Vec3 {
+    // Taken apart: the drop of the whole would be out-of-line glue,
+    // compiled for the baseline target (scripts/check-asm.sh).
+    let Composed {
+        cover,
+        radiance,
+        brightest,
+    } = compose(t, frags, tree, true);
     let mut e = Vec3::ZERO;
-    for (l, w) in c.radiance.iter().zip(&t.cos_weight) {
+    for (l, w) in radiance.iter().zip(&t.cos_weight) {
         e += *l * *w;
     }
-    let mut brightest = c.brightest;
-    if let Some((sky, max)) = sky {
+    let mut brightest = brightest;
+    if let Some(sky) = sky {
         // Unclamped per pixel: the layers' coverage overshoots one in some
         // pixels as it falls short in others (splats do not tile exactly),
         // and only the sum is right, as occlusion's is; an enclosed
         // receiver's sum may dip below zero, where no sky is seen.
         let mut open = Vec3::ZERO;
-        for (p, (cover, w)) in c.cover.iter().zip(&t.cos_weight).enumerate() {
-            open += sky(p) * ((1.0 - cover) * w);
+        for (p, (cover, w)) in cover.iter().zip(&t.cos_weight).enumerate() {
+            open += sky.at(t, p) * ((1.0 - cover) * w);
         }
         e += open.max(Vec3::ZERO);
-        brightest = brightest.max(*max);
+        brightest = brightest.max(sky.environment.max_radiance());
     }
     e.min(brightest * std::f32::consts::PI)
+}
+
+/// What a receiver's open pixels see: the environment, through the
+/// receiver's frame (local x, y, z in world space).
+pub(crate) struct Sky<'a> {
+    pub environment: &'a Environment,
+    pub frame: [Vec3; 3],
+}
+
+impl Sky<'_> {
+    /// The environment's radiance toward pixel `p`'s centre.
+    #[inline(always)]
+    fn at(&self, t: &Table, p: usize) -> Vec3 {
+        let l = t.dir[p];
+        let d = self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z;
+        self.environment.radiance(d)
+    }
 }
 
 /// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
 #[inline(always)]
 pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree) -> f32 {
-    let c = compose(t, frags, tree, false);
+    let Composed { cover, radiance, .. } = compose(t, frags, tree, false);
+    drop(radiance);
     let mut o = 0.0f32;
-    for (c, w) in c.cover.iter().zip(&t.cos_weight) {
+    for (c, w) in cover.iter().zip(&t.cos_weight) {
         o += c * w;
     }
     (o * std::f32::consts::FRAC_1_PI).min(1.0)
@@ -236,7 +256,7 @@ pub(crate) fn reflected(
     frags: &Fragments,
     tree: &Tree,
     f: impl Fn(usize) -> Vec3,
-    sky: Option<&(impl Fn(usize) -> Vec3, Vec3)>,
+    sky: Option<&Sky>,
 ) -> Vec3 {
     let c = compose(t, frags, tree, true);
     let mut e = Vec3::ZERO;
@@ -245,11 +265,11 @@ pub(crate) fn reflected(
             e += *l * f(p) * *w;
         }
     }
-    if let Some((sky, _)) = sky {
+    if let Some(sky) = sky {
         // As in `irradiance`: unclamped per pixel, the sum at least zero.
         let mut open = Vec3::ZERO;
         for (p, (cover, w)) in c.cover.iter().zip(&t.cos_weight).enumerate() {
-            open += sky(p) * f(p) * ((1.0 - cover) * w);
+            open += sky.at(t, p) * f(p) * ((1.0 - cover) * w);
         }
         e += open.max(Vec3::ZERO);
     }
