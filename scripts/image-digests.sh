@@ -13,6 +13,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cases=(
     "cornell-box"
+    "cornell-box --gathers all"
     "cornell-box --ao --spp 1"
     "cornell-box --bounces 2 --spp 1"
     "cornell-box --scheme scalar --spp 1"

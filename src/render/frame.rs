@@ -13,35 +13,40 @@ use super::bake::{BakeOptions, bake};
 use super::bounces::gather_bounce;
 use super::image::Image;
 use super::light::Lights;
-use super::options::{Component, RenderOptions};
+use super::options::RenderOptions;
 use super::output::{RenderError, RenderOutput, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
+use super::tile::TileResult;
 use super::trace::Tracer;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
 use crate::environment::Environment;
 use crate::error::Error;
 use crate::gather::{Gather, GatherOptions, Gatherer, ReceiverOrder};
-use crate::microbuffer::Convolution;
+use crate::microbuffer::{Convolution, MicroBuffer};
 use crate::points::{PointCloud, Surfel};
 use crate::rng::Rng;
 use crate::scene::Scene;
 use crate::simd::LANES;
 use crate::tree::Tree;
 
-/// One tile's pixels (index, radiance), traversal counters and receiver count.
-type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
-
-struct Accum(AtomicU64);
+/// Seconds summed over threads.
+#[derive(Default)]
+pub(crate) struct Accum(AtomicU64);
 impl Accum {
-    fn new() -> Self {
-        Accum(AtomicU64::new(0))
-    }
-    fn add(&self, seconds: f64) {
+    pub(crate) fn add(&self, seconds: f64) {
         self.0.fetch_add((seconds * 1e9) as u64, Ordering::Relaxed);
     }
     fn seconds(&self) -> f64 {
         self.0.load(Ordering::Relaxed) as f64 * 1e-9
     }
+}
+
+/// The Table-1 columns a render times.
+#[derive(Default)]
+pub(crate) struct Timers {
+    pub trav: Accum,
+    pub others: Accum,
+    pub direct: Accum,
 }
 
 /// One receiver of a packet: the pixel of its tile (0..16), where the camera
@@ -65,7 +70,7 @@ pub struct Frame<'s> {
     pub(crate) scheme: Scheme,
     pub(crate) pre: f64,
     pub(crate) stages: Vec<Stage>,
-    needs_points: bool,
+    pub(crate) needs_points: bool,
     /// What the open part of a receiver's hemisphere sees, and camera rays
     /// that leave the scene (none in AO mode).
     environment: Option<Arc<Environment>>,
@@ -97,6 +102,16 @@ impl<'s> Frame<'s> {
                 name: "spp",
                 value: "0".into(),
                 expected: "at least 1",
+            }
+            .into());
+        }
+        if let Some(g) = opts.gathers
+            && !(1..=opts.spp).contains(&g)
+        {
+            return Err(Error::InvalidParameter {
+                name: "gathers",
+                value: g.to_string(),
+                expected: "1 to spp",
             }
             .into());
         }
@@ -284,6 +299,25 @@ impl<'s> Frame<'s> {
         points
     }
 
+    /// Which camera samples of each pixel of a tile gather: `gathers`
+    /// consecutive samples (mod `spp`) from a random start per pixel, so
+    /// every stratum is equally likely and the gathered light unbiased.
+    pub(crate) fn gathering(&self, pixels: &[(u32, u32)], gathers: u32) -> Vec<u32> {
+        let (spp, cam) = (self.opts.spp, &self.scene.camera);
+        pixels
+            .iter()
+            .map(|&(x, y)| {
+                let pix = u64::from(y * cam.width + x);
+                let mut rng = Rng::new(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+                if gathers >= spp {
+                    0
+                } else {
+                    (rng.next_u64() % u64::from(spp)) as u32
+                }
+            })
+            .collect()
+    }
+
     /// Emission plus direct light at each point (zero in AO mode).
     pub(crate) fn direct(&self, points: &mut [PacketPoint]) -> Vec<Vec3> {
         if self.opts.ao {
@@ -320,8 +354,16 @@ impl<'s> Frame<'s> {
 
     /// Splats each point's cut (the packet `gatherer` cut last) into its
     /// microbuffer and convolves: the indirect light (or `1 − AO`) at each point.
-    pub(crate) fn shade(&self, points: &[PacketPoint], gatherer: &mut Gatherer) -> Vec<Vec3> {
-        let tree = &self.tree;
+    pub(crate) fn shade(&self, points: &[&PacketPoint], gatherer: &mut Gatherer) -> Vec<Vec3> {
+        self.gathered(points, gatherer)
+            .into_iter()
+            .map(|(_, l)| l)
+            .collect()
+    }
+
+    /// [`shade`](Self::shade), with each point's irradiance (or occlusion)
+    /// before its material: what a nearby point of the same surface reuses.
+    pub(crate) fn gathered(&self, points: &[&PacketPoint], gatherer: &mut Gatherer) -> Vec<(Vec3, Vec3)> {
         let what = if self.opts.ao {
             Convolution::Occlusion
         } else {
@@ -333,20 +375,25 @@ impl<'s> Frame<'s> {
             .iter()
             .zip(bufs.iter())
             .zip(out)
-            .map(|((pp, mb), e)| {
-                let sp = &pp.point;
-                let m = &self.scene.materials[sp.material];
-                if self.opts.ao {
-                    Vec3::splat(1.0 - e.x)
-                } else {
-                    let mut l = m.albedo * std::f32::consts::FRAC_1_PI * e;
-                    if let Some(lobe) = m.lobe() {
-                        l += mb.glossy(tree, sp.wo, &lobe);
-                    }
-                    l
-                }
-            })
+            .map(|((pp, mb), e)| (e, self.indirect(pp, e, Some(mb))))
             .collect()
+    }
+
+    /// The light `pp` reflects towards the camera from its gathered
+    /// irradiance `e` (`1 − e` in AO mode), plus its glossy lobe's
+    /// convolution of `mb` (a material with a lobe needs its own).
+    pub(crate) fn indirect(&self, pp: &PacketPoint, e: Vec3, mb: Option<&MicroBuffer>) -> Vec3 {
+        let sp = &pp.point;
+        let m = &self.scene.materials[sp.material];
+        if self.opts.ao {
+            Vec3::splat(1.0 - e.x)
+        } else {
+            let mut l = m.albedo * std::f32::consts::FRAC_1_PI * e;
+            if let (Some(lobe), Some(mb)) = (m.lobe(), mb) {
+                l += mb.glossy(&self.tree, sp.wo, &lobe);
+            }
+            l
+        }
     }
 
     /// Renders the image: per tile and camera sample, direct light, the cut
@@ -355,73 +402,20 @@ impl<'s> Frame<'s> {
     /// given first with 0 done).
     pub fn render(&self, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<RenderOutput, RenderError> {
         let wall = Instant::now();
-        let opts = &self.opts;
         let gather = self.gather()?;
         let (w, h) = (self.scene.camera.width, self.scene.camera.height);
         let tiles_total = self.tiles();
         progress(0, tiles_total);
         let done = AtomicU64::new(0);
-        let (acc_trav, acc_others, acc_direct) = (Accum::new(), Accum::new(), Accum::new());
+        let timers = Timers::default();
 
         let tiles: Vec<TileResult> = (0..tiles_total)
             .into_par_iter()
             .map(|tile| {
-                let mut stats = TraversalStats::default();
-                let mut gatherer = gather.gatherer();
-                let mut receivers_done = 0;
-                let pixels = self.tile_pixels(tile);
-                let mut sums = vec![Vec3::ZERO; pixels.len()];
-                let mut misses = Vec::new();
-                for s in 0..opts.spp {
-                    let t0 = Instant::now();
-                    misses.clear();
-                    let mut points = self.packet(&pixels, s, Some(&mut misses));
-                    // Camera rays that leave the scene see the environment
-                    // (light that bounced nowhere: direct).
-                    if opts.component != Component::Indirect {
-                        for &(k, l) in &misses {
-                            sums[k] += l;
-                        }
-                    }
-                    let direct = self.direct(&mut points);
-                    acc_direct.add(t0.elapsed().as_secs_f64());
-                    receivers_done += points.len();
-                    let mut indirect = vec![Vec3::ZERO; points.len()];
-                    if self.needs_points && !points.is_empty() {
-                        let receivers = Self::receivers(&points)?;
-                        let t1 = Instant::now();
-                        stats.merge(&gatherer.cut(&receivers)?);
-                        let t2 = Instant::now();
-                        acc_trav.add((t2 - t1).as_secs_f64());
-                        indirect = self.shade(&points, &mut gatherer);
-                        acc_others.add(t2.elapsed().as_secs_f64());
-                    }
-                    for ((pp, d), l) in points.iter().zip(&direct).zip(&indirect) {
-                        for (stage, v) in [("direct light at receivers", d), ("gather", l)] {
-                            if !v.is_finite() {
-                                let (x, y) = pixels[pp.pixel];
-                                return Err(RenderError::NonFinite {
-                                    stage,
-                                    place: format!("pixel ({x}, {y}), camera sample {s}"),
-                                    value: v.to_array(),
-                                });
-                            }
-                        }
-                        sums[pp.pixel] += match opts.component {
-                            Component::All => *d + *l,
-                            Component::Direct => *d,
-                            Component::Indirect => *l,
-                        };
-                    }
-                }
-                let out = pixels
-                    .iter()
-                    .zip(&sums)
-                    .map(|(&(x, y), sum)| (y * w + x, *sum / opts.spp as f32))
-                    .collect();
+                let out = self.render_tile(tile, &gather, &timers)?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(d as usize, tiles_total);
-                Ok((out, stats, receivers_done))
+                Ok(out)
             })
             .collect::<Result<_, RenderError>>()?;
 
@@ -443,9 +437,9 @@ impl<'s> Frame<'s> {
             },
             timings: Timings {
                 pre: self.pre,
-                trav: acc_trav.seconds(),
-                others: acc_others.seconds(),
-                direct: acc_direct.seconds(),
+                trav: timers.trav.seconds(),
+                others: timers.others.seconds(),
+                direct: timers.direct.seconds(),
                 total_wall: self.pre + wall.elapsed().as_secs_f64(),
             },
             stats,

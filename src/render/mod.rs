@@ -22,6 +22,7 @@ mod options;
 mod output;
 pub mod reference;
 mod shading;
+mod tile;
 mod trace;
 
 pub use bake::{BakeOptions, Baked, bake};

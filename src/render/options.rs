@@ -65,8 +65,13 @@ pub struct RenderOptions {
     pub microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
     pub bounces: u32,
-    /// Camera samples per pixel (each a receiver).
+    /// Camera samples per pixel (antialiasing; each a receiver of direct light).
     pub spp: u32,
+    /// Gathers per pixel, at most `spp` (`None`: one per camera sample).
+    /// The indirect light varies slowly across a pixel, so a few of its
+    /// camera samples, picked at random per pixel, estimate it without bias:
+    /// the pixel is `Σ direct / spp + Σ indirect / gathers`.
+    pub gathers: Option<u32>,
     /// Light samples per receiver for direct light (`None`: `spp`, at most 16).
     pub direct_samples: Option<u32>,
     /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
@@ -89,6 +94,7 @@ impl Default for RenderOptions {
             microbuffer: 24,
             bounces: 1,
             spp: 4,
+            gathers: Some(1),
             direct_samples: None,
             ao: false,
             density: 2000.0,

@@ -305,8 +305,9 @@ pub fn bench(
                     || gather.gatherer(),
                     |g, p| {
                         g.cut(&p.receivers).expect("a packet of at most 16");
+                        let points: Vec<_> = p.points.iter().collect();
                         let t0 = Instant::now();
-                        let l = frame.shade(&p.points, g);
+                        let l = frame.shade(&points, g);
                         std::hint::black_box(l);
                         t0.elapsed().as_nanos() as u64
                     },

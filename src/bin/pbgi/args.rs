@@ -213,9 +213,18 @@ pub struct RenderArgs {
     /// Traversal scheme: auto, scalar, single, packet or hybrid.
     #[arg(long, default_value = "auto")]
     pub scheme: String,
-    /// Stratified camera samples per pixel (each a receiver); also direct-light samples.
+    /// Stratified camera samples per pixel (antialiasing; each gets direct light).
     #[arg(long, default_value_t = RenderOptions::default().spp)]
     pub spp: u32,
+    /// Gathers per pixel (at most --spp): that many of a pixel's camera
+    /// samples, picked at random, estimate its indirect light; "all" gathers
+    /// at every camera sample (the dense render, for validation).
+    #[arg(long, default_value = "1")]
+    pub gathers: String,
+    /// Light samples at each camera sample's receiver for direct light
+    /// (default: --spp, at most 16).
+    #[arg(long)]
+    pub direct_samples: Option<u32>,
     /// Ambient occlusion instead of radiance.
     #[arg(long)]
     pub ao: bool,
@@ -264,6 +273,14 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         scheme: a.scheme.parse()?,
         ao: a.ao,
         component: a.component.parse()?,
+        gathers: match a.gathers.trim() {
+            "all" => None,
+            g => Some(
+                g.parse()
+                    .map_err(|_| format!("--gathers: {g:?} is neither a count nor \"all\""))?,
+            ),
+        },
+        direct_samples: a.direct_samples,
         ..a.settings.options(a.spp)?
     })
 }

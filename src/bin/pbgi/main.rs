@@ -279,12 +279,17 @@ fn write_image(img: &Image, path: &Path) -> Res<()> {
 fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
     let c = &scene.camera;
     println!(
-        "pbgi render: {} ({} triangles), {}×{}, {} spp, {} bounce(s){}",
+        "pbgi render: {} ({} triangles), {}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",
         scene.name,
         scene.triangle_count(),
         c.width,
         c.height,
         opts.spp,
+        opts.direct_samples.unwrap_or(opts.spp.min(16)),
+        match opts.gathers {
+            Some(g) if g < opts.spp => format!("{g} gather(s) per pixel"),
+            _ => "a gather per camera sample".to_string(),
+        },
         opts.bounces,
         if opts.ao { ", ambient occlusion" } else { "" }
     );
@@ -305,7 +310,7 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
     );
     if out.surfels > 0 {
         println!(
-            "{} surfels, {} receivers, {:.0} nodes tested per receiver{}",
+            "{} surfels, {} receivers gathered, {:.0} nodes tested per receiver{}",
             out.surfels,
             out.receivers,
             out.stats.nodes_per_receiver(),

@@ -1,0 +1,213 @@
+//! One 4×4-pixel tile of a frame: its camera samples, their direct light,
+//! and the gathers that give their indirect light, decoupled from the
+//! camera samples.
+//!
+//! The indirect light varies slowly over a surface, so a pixel gathers at
+//! `gathers` of its camera samples (picked from a random start, every
+//! stratum equally likely), and each other sample reuses the irradiance of
+//! a gathered sample of its pixel that lies on the same surface: the same
+//! plane up to rounding and a normal within [`SAME_NORMAL`]. A sample with no
+//! such neighbour (a pixel across an edge, a contact, a silhouette) or with
+//! a glossy lobe (whose convolution needs its own microbuffer) gathers
+//! itself. The sample's own material reflects the reused irradiance, so a
+//! pixel across a change of albedo stays exact. With every sample gathering
+//! (`RenderOptions::gathers` `None`), this is the dense render, bit for bit.
+
+use std::time::Instant;
+
+use glam::Vec3;
+
+use super::frame::{Frame, PacketPoint, Timers};
+use super::options::Component;
+use super::output::RenderError;
+use crate::cut::{Receiver, TraversalStats};
+use crate::gather::{Gather, Gatherer};
+use crate::simd::LANES;
+
+/// Camera samples `(s, point)` of a tile.
+type Samples = Vec<(u32, PacketPoint)>;
+
+/// One tile's pixels (index, radiance), traversal counters and gathers.
+pub(crate) type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
+
+/// Cosine between two normals of one surface.
+const SAME_NORMAL: f32 = 0.995;
+/// Distance off a gathered point's plane, relative to the camera's
+/// distance, that still counts as its plane (rounding only: two surfaces
+/// a pixel straddles are far further apart).
+const SAME_PLANE: f32 = 1e-4;
+
+/// A gathered sample of a pixel: where, and the irradiance (or occlusion)
+/// its microbuffer gave.
+struct Record {
+    position: Vec3,
+    normal: Vec3,
+    e: Vec3,
+}
+
+impl Record {
+    /// Whether `pp` (seen from `eye`) lies on this record's surface.
+    fn covers(&self, pp: &PacketPoint, eye: Vec3) -> bool {
+        let p = &pp.point;
+        self.normal.dot(p.normal) >= SAME_NORMAL
+            && self.normal.dot(p.position - self.position).abs() <= SAME_PLANE * (p.position - eye).length()
+    }
+}
+
+impl Frame<'_> {
+    /// Renders `tile`: per camera sample its receivers and their direct
+    /// light, then the gathers, in packets of up to 16 receivers.
+    pub(crate) fn render_tile(
+        &self,
+        tile: usize,
+        gather: &Gather,
+        timers: &Timers,
+    ) -> Result<TileResult, RenderError> {
+        let opts = &self.opts;
+        let w = self.scene.camera.width;
+        let eye = self.scene.camera.origin;
+        let mut stats = TraversalStats::default();
+        let mut gatherer = gather.gatherer();
+        let pixels = self.tile_pixels(tile);
+        let spp = opts.spp as usize;
+        let gathers = opts.gathers.unwrap_or(opts.spp);
+        // What camera sample `s` of pixel `k` adds, at `[k * spp + s]`: its
+        // direct light (emission, light samples, or the environment its ray
+        // escapes to) and its indirect light.
+        let mut adds = vec![Vec3::ZERO; pixels.len() * spp];
+        let start = self.gathering(&pixels, gathers);
+        let (mut first, mut rest): (Samples, Samples) = (Vec::new(), Vec::new());
+        let mut misses = Vec::new();
+        for s in 0..opts.spp {
+            let t0 = Instant::now();
+            misses.clear();
+            let mut points = self.packet(&pixels, s, Some(&mut misses));
+            // Camera rays that leave the scene see the environment (light
+            // that bounced nowhere: direct).
+            if opts.component != Component::Indirect {
+                for &(k, l) in &misses {
+                    adds[k * spp + s as usize] = l;
+                }
+            }
+            let direct = self.direct(&mut points);
+            timers.direct.add(t0.elapsed().as_secs_f64());
+            for (pp, d) in points.iter().zip(&direct) {
+                if !d.is_finite() {
+                    return Err(non_finite("direct light at receivers", &pixels, pp, s, *d));
+                }
+                if opts.component != Component::Indirect {
+                    adds[pp.pixel * spp + s as usize] = *d;
+                }
+            }
+            if self.needs_points {
+                for pp in points {
+                    if (s + opts.spp - start[pp.pixel]) % opts.spp < gathers {
+                        first.push((s, pp));
+                    } else {
+                        rest.push((s, pp));
+                    }
+                }
+            }
+        }
+        let mut records: Vec<Vec<Record>> = (0..pixels.len()).map(|_| Vec::new()).collect();
+        let mut gathered = first.len();
+        for chunk in first.chunks(LANES) {
+            self.gather_packet(
+                chunk,
+                &pixels,
+                &mut adds,
+                &mut records,
+                &mut gatherer,
+                &mut stats,
+                timers,
+            )?;
+        }
+        // The other samples reuse a record of their pixel's surface, or
+        // gather themselves.
+        let mut own = Vec::new();
+        for (s, pp) in rest {
+            let glossy = self.scene.materials[pp.point.material].lobe().is_some();
+            match records[pp.pixel].iter().find(|r| r.covers(&pp, eye)) {
+                Some(r) if !glossy => {
+                    if opts.component != Component::Direct {
+                        adds[pp.pixel * spp + s as usize] += self.indirect(&pp, r.e, None);
+                    }
+                }
+                _ => own.push((s, pp)),
+            }
+        }
+        gathered += own.len();
+        for chunk in own.chunks(LANES) {
+            self.gather_packet(
+                chunk,
+                &pixels,
+                &mut adds,
+                &mut records,
+                &mut gatherer,
+                &mut stats,
+                timers,
+            )?;
+        }
+        let out = pixels
+            .iter()
+            .zip(adds.chunks(spp))
+            .map(|(&(x, y), adds)| {
+                let sum = adds.iter().fold(Vec3::ZERO, |a, &b| a + b);
+                (y * w + x, sum / opts.spp as f32)
+            })
+            .collect();
+        Ok((out, stats, gathered))
+    }
+
+    /// Cuts, splats and convolves one packet of camera samples `(s, point)`
+    /// of `pixels`: adds each one's indirect light to `adds` and keeps its
+    /// irradiance in `records`.
+    #[allow(clippy::too_many_arguments)]
+    fn gather_packet(
+        &self,
+        chunk: &[(u32, PacketPoint)],
+        pixels: &[(u32, u32)],
+        adds: &mut [Vec3],
+        records: &mut [Vec<Record>],
+        gatherer: &mut Gatherer,
+        stats: &mut TraversalStats,
+        timers: &Timers,
+    ) -> Result<(), RenderError> {
+        let points: Vec<&PacketPoint> = chunk.iter().map(|(_, pp)| pp).collect();
+        let receivers = points
+            .iter()
+            .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+            .collect::<Result<Vec<_>, _>>()?;
+        let t1 = Instant::now();
+        stats.merge(&gatherer.cut(&receivers)?);
+        let t2 = Instant::now();
+        timers.trav.add((t2 - t1).as_secs_f64());
+        let out = self.gathered(&points, gatherer);
+        timers.others.add(t2.elapsed().as_secs_f64());
+        let spp = self.opts.spp as usize;
+        for ((s, pp), (e, l)) in chunk.iter().zip(out) {
+            if !l.is_finite() {
+                return Err(non_finite("gather", pixels, pp, *s, l));
+            }
+            if self.opts.component != Component::Direct {
+                adds[pp.pixel * spp + *s as usize] += l;
+            }
+            records[pp.pixel].push(Record {
+                position: pp.point.position,
+                normal: pp.point.normal,
+                e,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A non-finite value at camera sample `s` of `pp`'s pixel, at `stage`.
+fn non_finite(stage: &'static str, pixels: &[(u32, u32)], pp: &PacketPoint, s: u32, v: Vec3) -> RenderError {
+    let (x, y) = pixels[pp.pixel];
+    RenderError::NonFinite {
+        stage,
+        place: format!("pixel ({x}, {y}), camera sample {s}"),
+        value: v.to_array(),
+    }
+}
