@@ -46,3 +46,49 @@ impl Rng {
         Vec3::new(s * phi.cos(), s * phi.sin(), z).normalize()
     }
 }
+
+/// Point `i` of the first two dimensions of Sobol's sequence, a
+/// (0,2)-sequence: every aligned block of 2^m points is stratified in each
+/// elementary interval of area 2^-m, so a receiver's light samples, and a
+/// pixel's over its camera samples, cover a light evenly. `scramble` XORs
+/// the digits (random digit scrambling, which keeps the stratification).
+/// Both coordinates in `[0, 1)`.
+pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
+    let (mut x, mut y, mut v, mut bits) = (0u32, 0u32, 1u32 << 31, i);
+    let mut k = 0;
+    while bits != 0 {
+        if bits & 1 != 0 {
+            x ^= 1 << (31 - k);
+            y ^= v;
+        }
+        bits >>= 1;
+        v ^= v >> 1;
+        k += 1;
+    }
+    let unit = |b: u32| (b >> 8) as f32 * (1.0 / 16_777_216.0);
+    (unit(x ^ scramble[0]), unit(y ^ scramble[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sobol2;
+
+    /// Each block of 16 points puts one point in each of the 4×4 cells, and
+    /// in each 16×1 and 1×16 strip (the elementary intervals of a (0,4,2)-net).
+    #[test]
+    fn sobol_blocks_are_nets() {
+        for scramble in [[0, 0], [0xDEAD_BEEF, 0x1234_5678]] {
+            for block in 0..4 {
+                let pts: Vec<(f32, f32)> = (0..16).map(|i| sobol2(block * 16 + i, scramble)).collect();
+                for (cx, cy) in [(4usize, 4usize), (16, 1), (1, 16), (8, 2), (2, 8)] {
+                    let mut cells = vec![0; cx * cy];
+                    for &(x, y) in &pts {
+                        assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+                        cells[(x * cx as f32) as usize * cy + (y * cy as f32) as usize] += 1;
+                    }
+                    assert!(cells.iter().all(|&c| c == 1), "{cx}×{cy} cells {cells:?}");
+                }
+            }
+        }
+    }
+}

@@ -8,7 +8,7 @@ use super::light::{Lights, triangle};
 use super::trace::Tracer;
 use crate::error::{Error, Invalid};
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
-use crate::rng::Rng;
+use crate::rng::{Rng, mix};
 use crate::scene::Scene;
 
 /// How a scene is turned into surfels.
@@ -106,10 +106,11 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
         .enumerate()
         .map(|(i, &(position, normal, radius, material))| {
             let albedo = scene.materials[material].albedo;
-            let mut rng = Rng::new(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let f = albedo * std::f32::consts::FRAC_1_PI;
             let radiance = if albedo.max_element() > 0.0 {
-                lights.reflected(tracer, position, normal, opts.light_samples, &mut rng, |_| f)
+                let scramble = [h as u32, (h >> 32) as u32];
+                lights.reflected(tracer, position, normal, opts.light_samples, 0, scramble, |_| f)
             } else {
                 Vec3::ZERO
             };

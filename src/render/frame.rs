@@ -24,7 +24,7 @@ use crate::error::Error;
 use crate::gather::{Gather, GatherOptions, Gatherer, ReceiverOrder};
 use crate::microbuffer::{Convolution, MicroBuffer};
 use crate::points::{PointCloud, Surfel};
-use crate::rng::Rng;
+use crate::rng::{Rng, mix};
 use crate::scene::Scene;
 use crate::simd::LANES;
 use crate::tree::Tree;
@@ -50,11 +50,13 @@ pub(crate) struct Timers {
 }
 
 /// One receiver of a packet: the pixel of its tile (0..16), where the camera
-/// ray hit, and the random stream of its direct-light samples.
+/// ray hit, and where its direct-light samples start in its pixel's
+/// scrambled (0,2)-sequence (`Lights::reflected`).
 pub(crate) struct PacketPoint {
     pub pixel: usize,
     pub point: ShadingPoint,
-    pub rng: Rng,
+    pub light_first: u32,
+    pub light_scramble: [u32; 2],
 }
 
 /// A scene made ready to render: ray queries, lights, surfels and their tree
@@ -273,6 +275,7 @@ impl<'s> Frame<'s> {
     ) -> Vec<PacketPoint> {
         let cam = &self.scene.camera;
         let grid = (self.opts.spp as f32).sqrt().ceil() as u32;
+        let light_first = s.wrapping_mul(self.light_samples());
         let mut points = Vec::with_capacity(pixels.len());
         for (k, &(x, y)) in pixels.iter().enumerate() {
             let pix = y * cam.width + x;
@@ -286,7 +289,15 @@ impl<'s> Frame<'s> {
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {
                     if let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit) {
-                        points.push(PacketPoint { pixel: k, point, rng });
+                        // One scramble per pixel: its camera samples' light
+                        // samples are consecutive blocks of one sequence.
+                        let h = mix(self.opts.seed ^ u64::from(pix).wrapping_mul(0xA24B_AED4_963E_E407));
+                        points.push(PacketPoint {
+                            pixel: k,
+                            point,
+                            light_first,
+                            light_scramble: [h as u32, (h >> 32) as u32],
+                        });
                     }
                 }
                 None => {
@@ -318,6 +329,11 @@ impl<'s> Frame<'s> {
             .collect()
     }
 
+    /// Light samples at each camera sample's receiver.
+    pub(crate) fn light_samples(&self) -> u32 {
+        self.opts.direct_samples.unwrap_or(self.opts.spp.min(16))
+    }
+
     /// Emission plus direct light at each point (zero in AO mode).
     pub(crate) fn direct(&self, points: &mut [PacketPoint]) -> Vec<Vec3> {
         if self.opts.ao {
@@ -335,11 +351,16 @@ impl<'s> Frame<'s> {
                     Some(l) => fd + l.eval(n, wo, wi),
                     None => fd,
                 };
-                let samples = self.opts.direct_samples.unwrap_or(self.opts.spp.min(16));
                 sp.emitted
-                    + self
-                        .lights
-                        .reflected(&self.tracer, sp.position, n, samples, &mut pp.rng, f)
+                    + self.lights.reflected(
+                        &self.tracer,
+                        sp.position,
+                        n,
+                        self.light_samples(),
+                        pp.light_first,
+                        pp.light_scramble,
+                        f,
+                    )
             })
             .collect()
     }

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::trace::Tracer;
-use crate::rng::Rng;
+use crate::rng::sobol2;
 use crate::scene::{Light, Scene};
 
 /// The scene's emitters, ready to sample.
@@ -103,14 +103,19 @@ impl Lights {
     /// Reflected direct radiance towards the viewer at `p` (normal `n`,
     /// facing the viewer's side), `Σ f(ωi)·Li·cosθ / pdf` over `samples`
     /// area-light samples plus every point and directional light, where `f`
-    /// is the BRDF for incident direction `ωi`.
+    /// is the BRDF for incident direction `ωi`. The area samples are points
+    /// `first..first + samples` of the scrambled (0,2)-sequence
+    /// [`sobol2`]: stratified over the lights' total area, and with the
+    /// samples of the other camera samples of a pixel (the next indices).
+    #[allow(clippy::too_many_arguments)]
     pub fn reflected(
         &self,
         tracer: &Tracer,
         p: Vec3,
         n: Vec3,
         samples: u32,
-        rng: &mut Rng,
+        first: u32,
+        scramble: [u32; 2],
         f: impl Fn(Vec3) -> Vec3,
     ) -> Vec3 {
         let eps = tracer.epsilon();
@@ -118,19 +123,25 @@ impl Lights {
         let mut sum = Vec3::ZERO;
         if !self.triangles.is_empty() && samples > 0 {
             let mut area_sum = Vec3::ZERO;
-            // Stratified in the first dimension.
             for s in 0..samples {
-                let u0 = (s as f32 + rng.f32()) / samples as f32;
-                let x = u0 * self.area;
+                // The first coordinate picks a triangle by area and, within
+                // its share, the first barycentric coordinate.
+                let (u, w) = sobol2(first.wrapping_add(s), scramble);
+                let x = u * self.area;
                 let k = self
                     .cdf
                     .partition_point(|&c| c <= x)
                     .min(self.triangles.len() - 1);
+                let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+                let share = self.cdf[k] - lo;
+                let u = if share > 0.0 {
+                    ((x - lo) / share).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 let (v, ln, radiance) = &self.triangles[k];
-                let (mut a, mut b) = (rng.f32(), rng.f32());
-                if a + b > 1.0 {
-                    (a, b) = (1.0 - a, 1.0 - b);
-                }
+                let su = u.sqrt();
+                let (a, b) = (su * (1.0 - w), su * w);
                 let q = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
                 let d = q - origin;
                 let dist2 = d.length_squared();
