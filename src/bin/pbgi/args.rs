@@ -15,7 +15,7 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY file).
+    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY / OFF / glTF / GLB file).
     Render(RenderArgs),
     /// Render the ground truth with the path tracer (same scene, camera, bounces).
     Reference(ReferenceArgs),
@@ -158,7 +158,7 @@ pub fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
 /// SCENE's help: the names (see `pbgi scenes` for which are present).
 const SCENE_HELP: &str = "Scene: built-in cornell-box, cornell-box-glossy, nave (procedural, stands in for Sibenik); \
 after scripts/fetch-scenes.sh also bunny, bunny-glossy, sponza, sponza-bump, cornell-box-embree \
-(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY file";
+(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY / OFF / glTF (.gltf, .glb) file";
 
 #[derive(Args, Clone)]
 pub struct ReferenceArgs {
