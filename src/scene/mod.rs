@@ -235,6 +235,28 @@ impl Scene {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
 
+    /// Total area of the meshes' triangles (in f64: a model in millimetres
+    /// sums areas of 10⁶ and more); degenerate and non-finite triangles add nothing.
+    pub fn surface_area(&self) -> f64 {
+        let mut area = 0.0f64;
+        for m in &self.meshes {
+            for t in &m.triangles {
+                let [a, b, c] = t.map(|i| {
+                    m.positions
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or(Vec3::ZERO)
+                        .as_dvec3()
+                });
+                let twice = (b - a).cross(c - a).length();
+                if twice.is_finite() {
+                    area += 0.5 * twice;
+                }
+            }
+        }
+        area
+    }
+
     /// Whether anything emits light: a light, an emitting mesh, an environment.
     pub fn has_light(&self) -> bool {
         !self.lights.is_empty()
