@@ -139,8 +139,9 @@ impl RenderOptions {
             });
         }
         let area = scene.surface_area();
-        // No area: no triangle makes a surfel, whatever the density.
-        if !(area > 0.0) {
+        // No area: no triangle makes a surfel, whatever the density (an
+        // area beyond f64 cannot be sampled anyway: the bake refuses it).
+        if area == 0.0 || !area.is_finite() {
             return Ok(1.0);
         }
         Ok((budget as f64 / area).min(f32::MAX as f64) as f32)
