@@ -655,7 +655,7 @@ fn xml(body: &str) -> String {
 
 const PLY_HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
 
-/// Malformed Mitsuba XML, OBJ and PLY files, missing files, directories and
+/// Malformed Mitsuba XML, OBJ, PLY and glTF files, missing files, directories and
 /// devices, unsupported features: each a typed error naming file and line
 /// (or the item), never a panic, never an endless read.
 #[test]
@@ -729,6 +729,10 @@ fn scene_files() {
         ("nan.ply", format!("{PLY_HEADER}0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n"), vec!["mesh 0".into(), "vertex 1 is not finite".into()]),
         ("binary-trunc.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0\0\0".into(), vec!["binary-trunc.ply:".into(), "byte".into()]),
         ("mesh.stl", "solid x\nendsolid x\n".into(), vec!["mesh.stl".into(), "unsupported".into()]),
+        ("bad-json.gltf", "{\"asset\":{\"version\":\"2.0\"},\n\"meshes\":[}\n".into(), vec!["bad-json.gltf:2:".into()]),
+        ("accessor.gltf", r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":3}}]}]}"#.into(), vec!["accessor.gltf".into(), "meshes[0].primitives[0].attributes[\"POSITION\"]".into(), "(3)".into()]),
+        ("missing-bin.gltf", r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"gone.bin"}]}"#.into(), vec!["gone.bin".into(), "missing-bin.gltf".into()]),
+        ("trunc.glb", "glTF\u{2}\0\0\0\u{7f}\0\0\0".into(), vec!["trunc.glb".into(), "GLB byte 8".into()]),
     ];
     for (name, text, places) in &files {
         let p = write(name, text.as_bytes());
@@ -736,7 +740,13 @@ fn scene_files() {
         failures.extend(check(name, &Want::Error(places.clone()), || err(load(&p))));
     }
     // Bytes that are not UTF-8, in each format.
-    for name in ["binary.xml", "binary.obj", "binary.ply"] {
+    for name in [
+        "binary.xml",
+        "binary.obj",
+        "binary.ply",
+        "binary.gltf",
+        "binary.glb",
+    ] {
         let p = write(name, &[0xff, 0xfe, 0x00, 0x80, b'\n', 0xc3]);
         count += 1;
         failures.extend(check(name, &want(&[name]), || err(load(&p))));

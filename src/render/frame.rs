@@ -133,7 +133,7 @@ impl<'s> Frame<'s> {
         let tracer = Tracer::new(scene);
         let lights = Lights::new(scene);
         let bake_opts = BakeOptions {
-            density: opts.density,
+            density: opts.surfel_density(scene)?,
             light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
             seed: opts.seed,
         };

@@ -1,6 +1,13 @@
 //! Render settings.
 
 use crate::cut::{CutOptions, SchemeChoice};
+use crate::error::Error;
+use crate::scene::Scene;
+
+/// The surfel budget `pbgi render` gives a scene file when neither
+/// `--surfels` nor `--density` is given: about what the built-in Cornell box
+/// gets at density 2000 (51,965 surfels).
+pub const DEFAULT_SURFEL_BUDGET: u32 = 52_000;
 
 /// Which light an image holds: the indirect part alone is what the gather
 /// computes, and what its error is measured on.
@@ -76,8 +83,11 @@ pub struct RenderOptions {
     pub direct_samples: Option<u32>,
     /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
     pub ao: bool,
-    /// Surfels per unit area.
+    /// Surfels per unit area, when there is no `surfel_budget`.
     pub density: f32,
+    /// About this many surfels whatever the scene's units: the density is
+    /// the budget over the scene's surface area (`None`: `density`).
+    pub surfel_budget: Option<u32>,
     /// Area-light samples per surfel.
     pub surfel_light_samples: u32,
     /// Which light the image holds.
@@ -98,9 +108,48 @@ impl Default for RenderOptions {
             direct_samples: None,
             ao: false,
             density: 2000.0,
+            surfel_budget: None,
             surfel_light_samples: 16,
             component: Component::All,
             seed: 1,
         }
+    }
+}
+
+impl RenderOptions {
+    /// Surfels per unit area for `scene`: `density`, or the budget over the
+    /// scene's surface area ([`Scene::surface_area`]), so that a model in
+    /// millimetres gets as many surfels as the same model in metres.
+    ///
+    /// ```
+    /// use pbgi::render::RenderOptions;
+    /// let mut scene = pbgi::scene::builtin::cornell_box();
+    /// let budget = RenderOptions { surfel_budget: Some(10_000), ..RenderOptions::default() };
+    /// let metres = budget.surfel_density(&scene)?;
+    /// for m in &mut scene.meshes {
+    ///     m.positions.iter_mut().for_each(|p| *p *= 1000.0);
+    /// }
+    /// let millimetres = budget.surfel_density(&scene)?;
+    /// assert!((metres / millimetres / 1e6 - 1.0).abs() < 1e-5);
+    /// # Ok::<(), pbgi::Error>(())
+    /// ```
+    pub fn surfel_density(&self, scene: &Scene) -> Result<f32, Error> {
+        let Some(budget) = self.surfel_budget else {
+            return Ok(self.density);
+        };
+        if budget == 0 {
+            return Err(Error::InvalidParameter {
+                name: "surfels",
+                value: "0".into(),
+                expected: "a surfel budget of at least 1",
+            });
+        }
+        let area = scene.surface_area();
+        // No area: no triangle makes a surfel, whatever the density (an
+        // area beyond f64 cannot be sampled anyway: the bake refuses it).
+        if area == 0.0 || !area.is_finite() {
+            return Ok(1.0);
+        }
+        Ok((budget as f64 / area).min(f32::MAX as f64) as f32)
     }
 }

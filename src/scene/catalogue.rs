@@ -105,6 +105,15 @@ pub fn fetched_scene_in(name: &str, dir: &Path) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// Whether `name` is a scene name (built in or fetched) rather than a file.
+pub fn is_named(name: &str) -> bool {
+    #[cfg(feature = "formats")]
+    if files(name).is_some() {
+        return true;
+    }
+    builtin::NAMES.contains(&name)
+}
+
 /// A built-in scene by name, else a fetched scene by name (from the scene
 /// folder, [`scene_dir`]), else a file by path.
 #[cfg(feature = "formats")]

@@ -3,7 +3,7 @@
 //! Data enters as a name or a path ([`resolve`]) and leaves as a validated
 //! [`Scene`]. Built-in scenes need no files ([`builtin`], among them the
 //! procedural [`nave`]); files are read by [`formats`] behind the `formats`
-//! feature (Mitsuba 3 XML, OBJ + MTL, PLY). The classic test scenes (Stanford
+//! feature (Mitsuba 3 XML, OBJ + MTL, PLY, OFF, glTF 2.0). The classic test scenes (Stanford
 //! bunny, Dabrovic Sponza) are fetched from package registries by
 //! `scripts/fetch-scenes.sh` and built by `fetched`; [`catalogue`] knows the
 //! names and where their files are, and [`available_scenes`] lists the names
@@ -233,6 +233,28 @@ impl Scene {
     /// Total triangle count.
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Total area of the meshes' triangles (in f64: a model in millimetres
+    /// sums areas of 10⁶ and more); degenerate and non-finite triangles add nothing.
+    pub fn surface_area(&self) -> f64 {
+        let mut area = 0.0f64;
+        for m in &self.meshes {
+            for t in &m.triangles {
+                let [a, b, c] = t.map(|i| {
+                    m.positions
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or(Vec3::ZERO)
+                        .as_dvec3()
+                });
+                let twice = (b - a).cross(c - a).length();
+                if twice.is_finite() {
+                    area += 0.5 * twice;
+                }
+            }
+        }
+        area
     }
 
     /// Whether anything emits light: a light, an emitting mesh, an environment.

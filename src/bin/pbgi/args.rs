@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use pbgi::render::{ReferenceOptions, RenderOptions};
+use pbgi::render::{DEFAULT_SURFEL_BUDGET, ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
@@ -15,7 +15,7 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY file).
+    /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY / OFF / glTF / GLB file).
     Render(RenderArgs),
     /// Render the ground truth with the path tracer (same scene, camera, bounces).
     Reference(ReferenceArgs),
@@ -118,9 +118,14 @@ pub struct Settings {
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
     #[arg(long, default_value_t = RenderOptions::default().bounces)]
     pub bounces: u32,
-    /// Surfels per unit area.
-    #[arg(long, default_value_t = RenderOptions::default().density)]
-    pub density: f32,
+    /// Surfels per unit area, instead of a budget (default for the named
+    /// scenes, built for it: 2000).
+    #[arg(long, conflicts_with = "surfels")]
+    pub density: Option<f32>,
+    /// Surfel budget: about N surfels whatever the scene's units (default for
+    /// a file: 52000; the named scenes keep density 2000).
+    #[arg(long, value_name = "N")]
+    pub surfels: Option<u32>,
     /// Hybrid: switch an entry to single below this many active lanes.
     #[arg(long, default_value_t = CutOptions::default().hybrid_threshold)]
     pub hybrid_threshold: u32,
@@ -140,9 +145,25 @@ impl Settings {
             microbuffer: self.microbuffer,
             bounces: self.bounces,
             spp,
-            density: self.density,
+            density: self.density.unwrap_or(RenderOptions::default().density),
+            surfel_budget: self.surfels,
             ..RenderOptions::default()
         })
+    }
+
+    /// `opts` for scene `name`: with neither `--density` nor `--surfels`, a
+    /// file gets the default budget ([`DEFAULT_SURFEL_BUDGET`]) and the
+    /// named scenes (built in, fetched) their density 2000, so their images
+    /// stay as they were.
+    pub fn for_scene(&self, name: &str, opts: RenderOptions) -> RenderOptions {
+        let unset = self.density.is_none() && self.surfels.is_none();
+        RenderOptions {
+            surfel_budget: match opts.surfel_budget {
+                None if unset && !pbgi::scene::catalogue::is_named(name) => Some(DEFAULT_SURFEL_BUDGET),
+                b => b,
+            },
+            ..opts
+        }
     }
 }
 
@@ -158,7 +179,7 @@ pub fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
 /// SCENE's help: the names (see `pbgi scenes` for which are present).
 const SCENE_HELP: &str = "Scene: built-in cornell-box, cornell-box-glossy, nave (procedural, stands in for Sibenik); \
 after scripts/fetch-scenes.sh also bunny, bunny-glossy, sponza, sponza-bump, cornell-box-embree \
-(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY file";
+(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY / OFF / glTF (.gltf, .glb) file";
 
 #[derive(Args, Clone)]
 pub struct ReferenceArgs {

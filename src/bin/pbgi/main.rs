@@ -101,7 +101,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         let map = pbgi::scene::formats::read_lat_long(path, a.envmap_scale)?;
         scene.environment = Some(Environment::LatLong(map));
     }
-    let opts = options(a)?;
+    let opts = a.settings.for_scene(&a.scene, options(a)?);
     let out_path = a
         .output
         .clone()
@@ -310,8 +310,12 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
     );
     if out.surfels > 0 {
         println!(
-            "{} surfels, {} receivers gathered, {:.0} nodes tested per receiver{}",
+            "{} surfels ({}), {} receivers gathered, {:.0} nodes tested per receiver{}",
             out.surfels,
+            match opts.surfel_budget {
+                Some(b) => format!("budget {b}"),
+                None => format!("density {}", opts.density),
+            },
             out.receivers,
             out.stats.nodes_per_receiver(),
             out.stats
@@ -358,6 +362,10 @@ fn cmd_bench(a: &BenchArgs) -> Res<()> {
     let mut all = Vec::new();
     for name in &scenes {
         let scene = load_scene(name)?;
+        let opts = BenchOptions {
+            render: a.settings.for_scene(name, opts.render),
+            ..opts.clone()
+        };
         let bar = progress_bar("passes", format!("bench {}", scene.name));
         let rows = pool.install(|| bench(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
         bar.finish_and_clear();
@@ -498,7 +506,7 @@ fn cmd_report(a: &ReportArgs) -> Res<()> {
         )
         .into());
     }
-    let mut render_opts = a.settings.options(a.spp)?;
+    let mut render_opts = a.settings.for_scene(&a.scene, a.settings.options(a.spp)?);
     render_opts.direct_samples = Some(a.direct_samples);
     let sweep = SweepOptions {
         render: render_opts,

@@ -44,36 +44,41 @@ pub(super) fn single_file(
     path: &Path,
     (meshes, materials): (Vec<Mesh>, Vec<Material>),
 ) -> Result<Scene, SceneError> {
-    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for p in meshes.iter().flat_map(|m| &m.positions) {
-        lo = lo.min(*p);
-        hi = hi.max(*p);
-    }
     if meshes.iter().all(|m| m.triangles.is_empty()) {
         return Err(parse_err(path, 0, "no triangles"));
     }
-    let center = (lo + hi) * 0.5;
-    let size = (hi - lo).max_element().max(1e-6);
     Ok(Scene {
         name: stem(path),
+        camera: framing_camera(&meshes),
         meshes,
         materials,
         lights: Vec::new(),
         environment: None,
-        camera: Camera {
-            origin: center + Vec3::Z * (1.8 * size),
-            target: center,
-            up: Vec3::Y,
-            fov_degrees: 40.0,
-            fov_axis: FovAxis::Smaller,
-            width: 256,
-            height: 256,
-        },
         warnings: vec![format!(
             "{}: no camera in the file, a default camera looks at it from +z",
             path.display()
         )],
     })
+}
+
+/// A 256×256 camera looking at the meshes' bounding box from +z.
+pub(super) fn framing_camera(meshes: &[Mesh]) -> Camera {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for p in meshes.iter().flat_map(|m| &m.positions) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let center = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element().max(1e-6);
+    Camera {
+        origin: center + Vec3::Z * (1.8 * size),
+        target: center,
+        up: Vec3::Y,
+        fov_degrees: 40.0,
+        fov_axis: FovAxis::Smaller,
+        width: 256,
+        height: 256,
+    }
 }
 
 pub(super) fn stem(path: &Path) -> String {

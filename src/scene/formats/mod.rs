@@ -1,11 +1,12 @@
 //! Scene files: a subset of Mitsuba 3 XML (large enough for real scenes), OBJ +
-//! MTL, PLY and OFF. Anything read but not supported is named in
+//! MTL, PLY, OFF and glTF 2.0 (`.gltf`, `.glb`). Anything read but not supported is named in
 //! [`Scene::warnings`]; malformed input is a [`SceneError`] with file and line.
 //!
 //! Data enters as a path; it leaves as a validated [`Scene`]. One file per
-//! format (`mitsuba`, `obj`, `ply`, `off`), and `common` for what they share.
+//! format (`mitsuba`, `obj`, `ply`, `off`, `gltf`), and `common` for what they share.
 
 mod common;
+mod gltf;
 mod mitsuba;
 mod obj;
 mod off;
@@ -16,6 +17,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+pub use self::gltf::read_gltf;
 pub use common::read_lat_long;
 use common::single_file;
 use mitsuba::mitsuba;
@@ -25,7 +27,8 @@ pub use ply::read_ply;
 
 use super::{Material, Scene, SceneError};
 
-/// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`, `.off`).
+/// Loads a scene file, choosing the format by extension (`.xml`, `.obj`, `.ply`, `.off`,
+/// `.gltf`, `.glb`).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     load_with(path, &HashMap::new())
 }
@@ -50,11 +53,12 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
             let (mesh, warnings) = read_off(path)?;
             bare_mesh(path, mesh, warnings)?
         }
+        "gltf" | "glb" => read_gltf(path)?,
         _ => {
             return Err(SceneError::Unsupported {
                 path: path.to_path_buf(),
                 line: 0,
-                what: format!("file type {ext:?} (expected .xml, .obj, .ply or .off)"),
+                what: format!("file type {ext:?} (expected .xml, .obj, .ply, .off, .gltf or .glb)"),
             });
         }
     };
