@@ -9,13 +9,17 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BenchArgs, Cli, Command, CompareArgs, ReferenceArgs, RenderArgs, ReportArgs, Res, options, parse_choices,
-    parse_schemes,
+    BakeArgs, BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, ReportArgs,
+    Res, bake_options, options, parse_choices, parse_schemes,
 };
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
-use pbgi::render::{Image, ReferenceOptions, RenderOptions, RenderOutput, render, render_reference};
+use pbgi::TreeFile;
+use pbgi::render::{
+    Frame, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, bake_tree, render,
+    render_reference,
+};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
 use pbgi::scene::resolve;
@@ -24,6 +28,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
+        Some(Command::Bake(args)) => cmd_bake(&args),
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Compare(args)) => cmd_compare(&args),
@@ -81,10 +86,11 @@ fn tick(bar: &ProgressBar, done: usize, total: usize) {
     }
 }
 
-fn cmd_render(a: &RenderArgs) -> Res<()> {
+/// A scene with the environment the arguments give it.
+fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::scene::Scene> {
     use pbgi::environment::Environment;
-    let mut scene = load_scene(&a.scene)?;
-    if let Some(sky) = &a.sky {
+    let mut scene = load_scene(name)?;
+    if let Some(sky) = &env.sky {
         let v: Vec<f32> = sky
             .split(',')
             .map(|t| t.trim().parse::<f32>())
@@ -97,10 +103,15 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         };
         scene.environment = Some(Environment::uniform(l).map_err(|e| format!("--sky {sky:?}: {e}"))?);
     }
-    if let Some(path) = &a.envmap {
-        let map = pbgi::scene::formats::read_lat_long(path, a.envmap_scale)?;
+    if let Some(path) = &env.envmap {
+        let map = pbgi::scene::formats::read_lat_long(path, env.envmap_scale)?;
         scene.environment = Some(Environment::LatLong(map));
     }
+    Ok(scene)
+}
+
+fn cmd_render(a: &RenderArgs) -> Res<()> {
+    let scene = load_lit_scene(&a.scene, &a.environment)?;
     let opts = options(a)?;
     let out_path = a
         .output
@@ -108,16 +119,87 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
+    let loaded = match &a.tree {
+        Some(path) => {
+            let t0 = std::time::Instant::now();
+            let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let tree = TreeFile::load(std::io::BufReader::new(file))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            Some((tree, path, t0.elapsed().as_secs_f64()))
+        }
+        None => None,
+    };
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
-    let out = pool.install(|| render(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
+    let progress = |done, total| tick(&bar, done, total);
+    let mut from = None;
+    let out = pool.install(|| match loaded {
+        Some((tree, path, seconds)) => {
+            from = Some((path, seconds));
+            let frame = Frame::with_tree(&scene, &opts, tree).map_err(|e| match e {
+                RenderError::TreeMismatch { .. } => format!("{}: {e}", path.display()).into(),
+                e => Box::<dyn std::error::Error + Send + Sync>::from(e),
+            })?;
+            Ok::<_, Box<dyn std::error::Error + Send + Sync>>(frame.render(&progress)?)
+        }
+        None => Ok(render(&scene, &opts, &progress)?),
+    });
+    let out = out.map_err(|e| e as Box<dyn std::error::Error>)?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
+    if let Some((path, seconds)) = from {
+        println!(
+            "surfels + tree loaded from {} ({seconds:.3} s to read and check)",
+            path.display()
+        );
+    }
     println!(
         "wrote {} (image digest {:016x})",
         out_path.display(),
         out.image.digest()
     );
+    Ok(())
+}
+
+fn cmd_bake(a: &BakeArgs) -> Res<()> {
+    let scene = load_lit_scene(&a.scene, &a.environment)?;
+    let opts = bake_options(a)?;
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}.pbgi", scene.name)));
+    let pool = thread_pool(a.threads)?;
+    let t0 = std::time::Instant::now();
+    let file = pool.install(|| bake_tree(&scene, &opts))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let bytes = file.to_bytes();
+    std::fs::write(&out_path, &bytes).map_err(|e| format!("{}: {e}", out_path.display()))?;
+    let b = file.bake();
+    println!(
+        "pbgi bake: {} ({} triangles), {} bounce(s){}, density {}{}",
+        scene.name,
+        scene.triangle_count(),
+        b.bounces,
+        if b.ao { ", ambient occlusion" } else { "" },
+        b.density,
+        if b.gathered {
+            format!(
+                ", gathered at Ω {} and microbuffer {}",
+                b.max_solid_angle, b.microbuffer
+            )
+        } else {
+            String::new()
+        }
+    );
+    println!(
+        "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
+        file.cloud().len(),
+        file.tree().len(),
+        file.tree().depth(),
+        bytes.len() as f64 / 1e6,
+        pool.current_num_threads()
+    );
+    println!("wrote {} (scene hash {:016x})", out_path.display(), b.scene);
     Ok(())
 }
 
@@ -279,9 +361,10 @@ fn write_image(img: &Image, path: &Path) -> Res<()> {
 fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
     let c = &scene.camera;
     println!(
-        "pbgi render: {} ({} triangles), {}×{}, {} spp, {} bounce(s){}",
+        "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} bounce(s){}",
         scene.name,
         scene.triangle_count(),
+        opts.crop.map(|w| format!("crop {w} of ")).unwrap_or_default(),
         c.width,
         c.height,
         opts.spp,
