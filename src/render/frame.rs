@@ -1,6 +1,9 @@
 //! A frame: the scene made ready (ray queries, lights, surfels, tree: the
-//! paper's `pre.`), then per 4×4-pixel tile and camera sample the packet of
-//! receivers, its direct light, its cuts, splatting and convolution.
+//! paper's `pre.`, or the surfels and tree from a tree file), then per
+//! 4×4-pixel tile and camera sample the packet of receivers, its direct
+//! light, its cuts, splatting and convolution. A crop renders the tiles of
+//! the frame's grid that meet its window: a pixel's samples are seeded by
+//! its place in the full frame, so it comes out the same, bit for bit.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};

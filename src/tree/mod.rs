@@ -20,6 +20,7 @@ use glam::{DVec3, Vec3};
 
 use crate::points::{PointCloud, Surfel};
 
+mod check;
 pub mod file;
 
 pub use file::{BakeRecord, TreeFile, TreeFileError};

@@ -4,21 +4,20 @@
 //! and prints the timing summary in the paper's Table 1 columns.
 
 mod args;
+mod bake;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BakeArgs, BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, ReportArgs,
-    Res, bake_options, options, parse_choices, parse_schemes,
+    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, ReportArgs, Res,
+    options, parse_choices, parse_schemes,
 };
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
-use pbgi::TreeFile;
 use pbgi::render::{
-    Frame, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, bake_tree, render,
-    render_reference,
+    Frame, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
 };
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
@@ -28,7 +27,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
-        Some(Command::Bake(args)) => cmd_bake(&args),
+        Some(Command::Bake(args)) => bake::cmd_bake(&args),
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Compare(args)) => cmd_compare(&args),
@@ -45,7 +44,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
+pub(crate) fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         if n == 0 {
@@ -87,7 +86,7 @@ fn tick(bar: &ProgressBar, done: usize, total: usize) {
 }
 
 /// A scene with the environment the arguments give it.
-fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::scene::Scene> {
+pub(crate) fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::scene::Scene> {
     use pbgi::environment::Environment;
     let mut scene = load_scene(name)?;
     if let Some(sky) = &env.sky {
@@ -120,13 +119,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
     let loaded = match &a.tree {
-        Some(path) => {
-            let t0 = std::time::Instant::now();
-            let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-            let tree = TreeFile::load(std::io::BufReader::new(file))
-                .map_err(|e| format!("{}: {e}", path.display()))?;
-            Some((tree, path, t0.elapsed().as_secs_f64()))
-        }
+        Some(path) => Some(bake::load_tree(path)?),
         None => None,
     };
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
@@ -158,48 +151,6 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         out_path.display(),
         out.image.digest()
     );
-    Ok(())
-}
-
-fn cmd_bake(a: &BakeArgs) -> Res<()> {
-    let scene = load_lit_scene(&a.scene, &a.environment)?;
-    let opts = bake_options(a)?;
-    let out_path = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}.pbgi", scene.name)));
-    let pool = thread_pool(a.threads)?;
-    let t0 = std::time::Instant::now();
-    let file = pool.install(|| bake_tree(&scene, &opts))?;
-    let seconds = t0.elapsed().as_secs_f64();
-    let bytes = file.to_bytes();
-    std::fs::write(&out_path, &bytes).map_err(|e| format!("{}: {e}", out_path.display()))?;
-    let b = file.bake();
-    println!(
-        "pbgi bake: {} ({} triangles), {} bounce(s){}, density {}{}",
-        scene.name,
-        scene.triangle_count(),
-        b.bounces,
-        if b.ao { ", ambient occlusion" } else { "" },
-        b.density,
-        if b.gathered {
-            format!(
-                ", gathered at Ω {} and microbuffer {}",
-                b.max_solid_angle, b.microbuffer
-            )
-        } else {
-            String::new()
-        }
-    );
-    println!(
-        "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
-        file.cloud().len(),
-        file.tree().len(),
-        file.tree().depth(),
-        bytes.len() as f64 / 1e6,
-        pool.current_num_threads()
-    );
-    println!("wrote {} (scene hash {:016x})", out_path.display(), b.scene);
     Ok(())
 }
 
