@@ -863,7 +863,7 @@ fn tree_files_and_crops() {
         (
             "trailing.pbgi",
             [&good[..], b"x"].concat(),
-            vec![format!("1 bytes after its end at byte {n}")],
+            vec![format!("continues past its end at byte {n}")],
         ),
         (
             "flipped.pbgi",
@@ -918,6 +918,11 @@ fn tree_files_and_crops() {
             err(TreeFile::load(std::fs::File::open(&p).unwrap()))
         }));
     }
+    // An endless stream: its header is not a tree's, and nothing more is read.
+    count += 1;
+    failures.extend(check("/dev/zero", &want(&["not a pbgi tree file"]), || {
+        err(TreeFile::load(std::fs::File::open("/dev/zero").unwrap()))
+    }));
     let d = RenderOptions::default();
     for (name, crop, place) in [
         (

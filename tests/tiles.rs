@@ -137,6 +137,10 @@ fn bad_crops_and_trees_are_errors_naming_them() {
         &["render", scene, "-o", o, "--tree", tree, "--density", "60"],
         "baked with --density 50, this render has 60",
     );
+    fails(
+        &["render", scene, "-o", o, "--tree", "/dev/zero"],
+        "/dev/zero: not a regular file",
+    );
     std::fs::write(dir.join("junk.pbgi"), b"not a tree").unwrap();
     let junk = dir.join("junk.pbgi");
     fails(

@@ -182,7 +182,14 @@ fn each_kind_of_damage_has_its_error() {
 
     let mut b = good.clone();
     b.push(0);
-    assert!(matches!(load(&b), TreeFileError::TrailingBytes { offset, .. } if offset as usize == n));
+    assert!(matches!(load(&b), TreeFileError::TrailingBytes { offset } if offset as usize == n));
+    // A reader stops one byte past the end the header gives.
+    let endless = std::io::Read::chain(good.as_slice(), std::io::repeat(7));
+    let e = TreeFile::load(endless).unwrap_err();
+    assert!(
+        matches!(e, TreeFileError::TrailingBytes { offset } if offset as usize == n),
+        "{e}"
+    );
 
     // A child link out of range, checksum made right: node 0's child field.
     let (nodes_at, node) = (64 + 40 * 8, 72);
@@ -240,7 +247,8 @@ fn each_kind_of_damage_has_its_error() {
 fn prefixes_and_byte_changes_never_panic() {
     let good = corner_file().to_bytes();
     for len in 0..good.len() {
-        let r = catch_unwind(|| TreeFile::from_bytes(&good[..len]));
+        // Through `load` (a reader: header first, then the length it gives).
+        let r = catch_unwind(|| TreeFile::load(&good[..len]));
         match r {
             Err(_) => panic!("prefix of {len} bytes panicked"),
             Ok(Ok(_)) => panic!("prefix of {len} bytes loaded"),

@@ -133,8 +133,6 @@ pub enum TreeFileError {
     TrailingBytes {
         /// Where the file should end.
         offset: u64,
-        /// Its length.
-        len: u64,
     },
     /// The checksum at `offset` does not match the bytes before it.
     Checksum {
@@ -174,12 +172,8 @@ impl fmt::Display for TreeFileError {
                 f,
                 "tree file format version {found} at byte 8, this pbgi reads version {supported}: bake it again"
             ),
-            TreeFileError::TrailingBytes { offset, len } => {
-                write!(
-                    f,
-                    "tree file has {} bytes after its end at byte {offset}",
-                    len - offset
-                )
+            TreeFileError::TrailingBytes { offset } => {
+                write!(f, "tree file continues past its end at byte {offset}")
             }
             TreeFileError::Checksum {
                 offset,
@@ -328,9 +322,20 @@ impl TreeFile {
 
     /// Reads a file written by [`save`](Self::save), checking it whole
     /// (see the module's notes) before anything uses it.
+    /// It reads the header, then at most the length the header gives (and
+    /// one byte more, to see trailing bytes): an endless stream is not read
+    /// whole.
     pub fn load(mut r: impl Read) -> Result<Self, TreeFileError> {
         let mut bytes = Vec::new();
-        r.read_to_end(&mut bytes).map_err(TreeFileError::Io)?;
+        let io = TreeFileError::Io;
+        r.by_ref()
+            .take(HEADER as u64)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() == HEADER && bytes[..8] == MAGIC && bytes[8..12] == VERSION.to_le_bytes() {
+            let more = file_len(&bytes) - HEADER as u64 + 1;
+            r.take(more).read_to_end(&mut bytes).map_err(io)?;
+        }
         Self::from_bytes(&bytes)
     }
 
@@ -378,13 +383,12 @@ impl TreeFile {
         let microbuffer = rd.u32();
         let (n, clusters, depth) = (rd.u32() as u64, rd.u32() as u64, rd.u32());
         let nodes = (2 * n).saturating_sub(1);
-        // At most 2^32 · 184 bytes: no overflow in u64.
-        let needed = HEADER as u64 + SURFEL as u64 * n + NODE as u64 * nodes + CLUSTER as u64 * clusters + 8;
+        let needed = file_len(bytes);
         if len < needed {
             return Err(TreeFileError::Truncated { offset: len, needed });
         }
         if len > needed {
-            return Err(TreeFileError::TrailingBytes { offset: needed, len });
+            return Err(TreeFileError::TrailingBytes { offset: needed });
         }
         let end = bytes.len() - CHECKSUM;
         let stored = u64::from_le_bytes(bytes[end..].try_into().expect("8 bytes"));
@@ -491,6 +495,19 @@ impl TreeFile {
             })?;
         Ok(TreeFile { bake, cloud, tree })
     }
+}
+
+/// The length a file of this header (at least [`HEADER`] bytes) has.
+fn file_len(header: &[u8]) -> u64 {
+    let count = |at: usize| {
+        u64::from(u32::from_le_bytes(
+            header[at..at + 4].try_into().expect("4 bytes"),
+        ))
+    };
+    let (n, clusters) = (count(52), count(56));
+    // At most 2^32 · 184 bytes: no overflow in u64.
+    (HEADER + CHECKSUM) as u64 + (SURFEL + 2 * NODE) as u64 * n - if n > 0 { NODE as u64 } else { 0 }
+        + CLUSTER as u64 * clusters
 }
 
 /// Reads little-endian fields; the caller has checked the length.

@@ -14,6 +14,10 @@ use crate::{load_lit_scene, thread_pool};
 pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
     let t0 = Instant::now();
     let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    // A device or a pipe could be endless.
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return Err(format!("{}: not a regular file", path.display()).into());
+    }
     let tree =
         TreeFile::load(std::io::BufReader::new(file)).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok((tree, path, t0.elapsed().as_secs_f64()))
