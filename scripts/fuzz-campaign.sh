@@ -29,7 +29,7 @@ SAN=${FUZZ_SANITIZER:-address}
 UNIT_TIMEOUT=${FUZZ_TIMEOUT:-20}
 shift $(($# < 2 ? $# : 2))
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(traversal scene_parsers microbuffer)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(traversal scene_parsers microbuffer tree_file)
 cargo fuzz --version > /dev/null 2>&1 || cargo install cargo-fuzz --locked
 
 mkdir -p target

@@ -101,6 +101,14 @@ impl Environment {
         }
     }
 
+    /// The map's size and texels, row by row (a uniform sky: 1 × 1).
+    pub fn texels(&self) -> (usize, usize, &[Vec3]) {
+        match self {
+            Environment::Uniform(l) => (1, 1, std::slice::from_ref(l)),
+            Environment::LatLong(m) => (m.width, m.height, &m.pixels),
+        }
+    }
+
     /// The largest radiance per channel.
     #[inline(always)]
     pub fn max_radiance(&self) -> Vec3 {

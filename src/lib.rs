@@ -117,4 +117,4 @@ pub use cut::{
 pub use error::{Error, Invalid};
 pub use points::{PointCloud, Surfel};
 pub use simd::{Isa, IsaError, LANES};
-pub use tree::{NodeId, NodeView, Tree};
+pub use tree::{NodeId, NodeView, Tree, TreeFile, TreeFileError};

@@ -803,6 +803,228 @@ fn scene_files() {
     report(failures, count);
 }
 
+/// Tree files (`pbgi bake`, `TreeFile::load`) broken every way the format
+/// tells apart, read from disk, and crop windows and trees that do not fit
+/// the render: each a typed error naming the byte offset (or the window, the
+/// setting), never a panic.
+#[test]
+fn tree_files_and_crops() {
+    use pbgi::render::{Crop, Frame, bake_tree};
+    use pbgi::tree::TreeFile;
+    use pbgi::tree::file::checksum;
+
+    let mut failures = Vec::new();
+    let mut count = 0;
+    let scene = small_box();
+    let opts = quick(RenderOptions::default());
+    let good = bake_tree(&scene, &opts).unwrap().to_bytes();
+    let n = good.len();
+    let with_checksum = |mut b: Vec<u8>| {
+        let end = b.len() - 8;
+        let sum = checksum(&b[..end]);
+        b[end..].copy_from_slice(&sum.to_le_bytes());
+        b
+    };
+    let edit = |at: usize, bytes: &[u8]| {
+        let mut b = good.clone();
+        b[at..at + bytes.len()].copy_from_slice(bytes);
+        b
+    };
+    let surfels = u32::from_le_bytes(good[52..56].try_into().unwrap()) as usize;
+    let nodes_at = 64 + 40 * surfels;
+    // The last node is the deepest rightmost leaf.
+    let last_node = nodes_at + 72 * (2 * surfels - 2);
+    let files: Vec<(&str, Vec<u8>, Vec<String>)> = vec![
+        (
+            "empty.pbgi",
+            Vec::new(),
+            vec!["truncated".into(), "ends at byte 0".into()],
+        ),
+        (
+            "text.pbgi",
+            b"not a tree".to_vec(),
+            vec!["not a pbgi tree file".into()],
+        ),
+        (
+            "magic-only.pbgi",
+            good[..8].to_vec(),
+            vec!["ends at byte 8".into()],
+        ),
+        (
+            "version.pbgi",
+            edit(8, &9u32.to_le_bytes()),
+            vec!["version 9 at byte 8".into()],
+        ),
+        (
+            "header.pbgi",
+            good[..40].to_vec(),
+            vec!["ends at byte 40, 64 bytes expected".into()],
+        ),
+        (
+            "short.pbgi",
+            good[..n - 100].to_vec(),
+            vec![format!("ends at byte {}, {n} bytes", n - 100)],
+        ),
+        (
+            "huge-count.pbgi",
+            edit(52, &u32::MAX.to_le_bytes()),
+            vec!["truncated".into()],
+        ),
+        (
+            "trailing.pbgi",
+            [&good[..], b"x"].concat(),
+            vec![format!("continues past its end at byte {n}")],
+        ),
+        (
+            "flipped.pbgi",
+            edit(n / 2, &[good[n / 2] ^ 4]),
+            vec![format!("checksum at byte {}", n - 8)],
+        ),
+        (
+            "flags.pbgi",
+            with_checksum(edit(40, &[0x80])),
+            vec!["byte 40: unknown flags".into()],
+        ),
+        (
+            "child.pbgi",
+            with_checksum(edit(nodes_at + 36, &7u32.to_le_bytes())),
+            vec![format!(
+                "byte {nodes_at}: node 0: children in pair record 7, expected 1"
+            )],
+        ),
+        (
+            "nan-centre.pbgi",
+            with_checksum(edit(nodes_at + 72, &f32::NAN.to_le_bytes())),
+            vec![format!("byte {}: node 1: centre", nodes_at + 72)],
+        ),
+        (
+            "kind.pbgi",
+            with_checksum(edit(nodes_at + 72 + 56, &[5])),
+            vec!["byte 56:".into(), "mixed nodes".into()],
+        ),
+        (
+            "leaf-kind.pbgi",
+            with_checksum(edit(last_node + 56, &[0])),
+            vec![format!(
+                "byte {last_node}: node {}: kind does not match",
+                2 * surfels - 2
+            )],
+        ),
+        (
+            "surfel-radius.pbgi",
+            with_checksum(edit(64 + 40 * 2 + 24, &(-1.0f32).to_le_bytes())),
+            vec![format!("byte {}: surfel 2: radius -1", 64 + 80)],
+        ),
+        (
+            "depth.pbgi",
+            with_checksum(edit(60, &31u32.to_le_bytes())),
+            vec!["byte 60: depth 31 recorded".into()],
+        ),
+    ];
+    for (name, bytes, places) in &files {
+        let p = write(name, bytes);
+        count += 1;
+        failures.extend(check(name, &Want::Error(places.clone()), || {
+            err(TreeFile::load(std::fs::File::open(&p).unwrap()))
+        }));
+    }
+    // An endless stream: its header is not a tree's, and nothing more is read.
+    count += 1;
+    failures.extend(check("/dev/zero", &want(&["not a pbgi tree file"]), || {
+        err(TreeFile::load(std::fs::File::open("/dev/zero").unwrap()))
+    }));
+    let d = RenderOptions::default();
+    for (name, crop, place) in [
+        (
+            "empty crop",
+            Crop {
+                x0: 4,
+                y0: 0,
+                x1: 4,
+                y1: 6,
+            },
+            "crop 4,0,4,6: empty window",
+        ),
+        (
+            "crop past the edge",
+            Crop {
+                x0: 0,
+                y0: 0,
+                x1: 9,
+                y1: 6,
+            },
+            "crop 0,0,9,6: outside the 8×6 frame",
+        ),
+        (
+            "crop past the foot",
+            Crop {
+                x0: 0,
+                y0: 5,
+                x1: 8,
+                y1: 7,
+            },
+            "outside the 8×6 frame",
+        ),
+        (
+            "crop upside down",
+            Crop {
+                x0: 0,
+                y0: 5,
+                x1: 8,
+                y1: 2,
+            },
+            "empty window",
+        ),
+    ] {
+        count += 1;
+        let o = RenderOptions {
+            crop: Some(crop),
+            ..quick(d)
+        };
+        failures.extend(check(name, &want(&[place]), || {
+            err(render(&scene, &o, &|_, _| {}))
+        }));
+    }
+    for text in ["", "1,2,3", "1,2,3,x", "-1,0,4,4", "0,0,4,4,4"] {
+        count += 1;
+        failures.extend(check(
+            &format!("crop {text:?}"),
+            &want(&["expected x0,y0,x1,y1"]),
+            || err(text.parse::<Crop>()),
+        ));
+    }
+    let mut other = small_box();
+    other.lights.push(Light::Point {
+        position: Vec3::ZERO,
+        intensity: Vec3::ONE,
+    });
+    for (name, scene, o, place) in [
+        ("tree of another scene", &other, opts, "baked with scene"),
+        (
+            "tree of another density",
+            &scene,
+            RenderOptions {
+                density: 40.0,
+                ..opts
+            },
+            "--density 50, this render has 40",
+        ),
+        (
+            "tree without bounces",
+            &scene,
+            RenderOptions { bounces: 3, ..opts },
+            "--bounces 1, this render has 3",
+        ),
+    ] {
+        count += 1;
+        let file = TreeFile::from_bytes(&good).unwrap();
+        failures.extend(check(name, &want(&[place]), || {
+            err(Frame::with_tree(scene, &o, file))
+        }));
+    }
+    report(failures, count);
+}
+
 /// Inputs on which `fuzz/fuzz_targets/scene_parsers.rs` crashed, replayed the
 /// way the target reads them (byte 0 picks xml/obj/ply/off by `% 4`, `\n@@\n` separates
 /// the side files `a.ply`, `a.obj`, `m.mtl`). Each must load or fail with an

@@ -162,7 +162,9 @@ fn step<S: CutSink, const FLAGS: bool>(
     );
     // SAFETY: entries only ever hold pair records read from the tree's child
     // links or located from its node ids (flags stripped above), or 0 (the
-    // root's record), all in range.
+    // root's record), all in range: `Tree::build` makes them so, and a tree
+    // read from a file is refused unless its links are laid out the same
+    // (`tree::file`, `check_structure`).
     let pairs: [&PairRecord; PAIRS] =
         std::array::from_fn(|i| unsafe { a.pairs.get_unchecked(entries[i] as usize) });
     let node = load_pair_nodes(&pairs);

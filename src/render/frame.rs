@@ -1,6 +1,9 @@
 //! A frame: the scene made ready (ray queries, lights, surfels, tree: the
-//! paper's `pre.`), then per 4×4-pixel tile and camera sample the packet of
-//! receivers, its direct light, its cuts, splatting and convolution.
+//! paper's `pre.`, or the surfels and tree from a tree file), then per
+//! 4×4-pixel tile and camera sample the packet of receivers, its direct
+//! light, its cuts, splatting and convolution. A crop renders the tiles of
+//! the frame's grid that meet its window: a pixel's samples are seeded by
+//! its place in the full frame, so it comes out the same, bit for bit.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -9,11 +12,12 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bake::{BakeOptions, bake};
-use super::bounces::gather_bounce;
+use super::baked::{
+    bake_record, build, check_options, check_record, environment, gather_options, loaded_stages, needs_points,
+};
 use super::image::Image;
 use super::light::Lights;
-use super::options::RenderOptions;
+use super::options::{Crop, RenderOptions};
 use super::output::{RenderError, RenderOutput, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
 use super::tile::TileResult;
@@ -21,13 +25,12 @@ use super::trace::Tracer;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
 use crate::environment::Environment;
 use crate::error::Error;
-use crate::gather::{Gather, GatherOptions, Gatherer, ReceiverOrder};
+use crate::gather::{Gather, Gatherer};
 use crate::microbuffer::{Convolution, MicroBuffer};
-use crate::points::{PointCloud, Surfel};
 use crate::rng::{Rng, mix};
 use crate::scene::Scene;
 use crate::simd::LANES;
-use crate::tree::Tree;
+use crate::tree::{Tree, TreeFile};
 
 /// Seconds summed over threads.
 #[derive(Default)]
@@ -78,112 +81,46 @@ pub struct Frame<'s> {
     environment: Option<Arc<Environment>>,
 }
 
-/// The gather options of a render: its cut, microbuffer and environment,
-/// over coherent packets (screen tiles; surfels in tree order).
-fn gather_options(
-    opts: &RenderOptions,
-    scheme: SchemeChoice,
-    environment: &Option<Arc<Environment>>,
-) -> GatherOptions {
-    GatherOptions {
-        cut: opts.cut,
-        microbuffer: opts.microbuffer,
-        scheme,
-        order: ReceiverOrder::Coherent,
-        environment: environment.clone(),
-    }
-}
-
 impl<'s> Frame<'s> {
     /// Validates the options, builds the ray queries, bakes the surfels
     /// (with extra bounces if asked) and builds the tree.
     pub fn prepare(scene: &'s Scene, opts: &RenderOptions) -> Result<Self, RenderError> {
-        scene.validate()?;
-        if opts.spp == 0 {
-            return Err(Error::InvalidParameter {
-                name: "spp",
-                value: "0".into(),
-                expected: "at least 1",
-            }
-            .into());
-        }
-        if let Some(g) = opts.gathers
-            && !(1..=opts.spp).contains(&g)
-        {
-            return Err(Error::InvalidParameter {
-                name: "gathers",
-                value: g.to_string(),
-                expected: "1 to spp",
-            }
-            .into());
-        }
-        crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
-        let mut stages = Vec::new();
-        let environment = if opts.ao {
-            None
-        } else {
-            scene.environment.clone().map(Arc::new)
-        };
-        // The environment's light arrives through the gather: it needs the
-        // surfels (as occluders) even without bounces.
-        let needs_points = opts.ao || opts.bounces > 0 || environment.is_some();
+        Self::prepare_with(scene, opts, None)
+    }
+
+    /// [`prepare`](Self::prepare) with the surfels and tree of `file` (from
+    /// [`bake_tree`](super::bake_tree), `pbgi bake`) instead of building
+    /// them: the same frame, bit for bit. Errors: a tree baked from another
+    /// scene or with other settings ([`RenderError::TreeMismatch`]).
+    pub fn with_tree(scene: &'s Scene, opts: &RenderOptions, file: TreeFile) -> Result<Self, RenderError> {
+        Self::prepare_with(scene, opts, Some(file))
+    }
+
+    fn prepare_with(
+        scene: &'s Scene,
+        opts: &RenderOptions,
+        file: Option<TreeFile>,
+    ) -> Result<Self, RenderError> {
+        check_options(scene, opts)?;
+        let environment = environment(scene, opts);
+        let needs_points = needs_points(opts, &environment);
         let scheme = opts.scheme.resolve(LANES);
+        let mut stages = Vec::new();
 
         let t_pre = Instant::now();
         let tracer = Tracer::new(scene);
         let lights = Lights::new(scene);
-        let bake_opts = BakeOptions {
-            density: opts.surfel_density(scene)?,
-            light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
-            seed: opts.seed,
-        };
-        let (tree, surfels) = if needs_points {
-            let baked = bake(scene, &tracer, &lights, &bake_opts)?;
-            stages.push(Stage {
-                name: "surfels + direct light at surfels",
-                skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
-            });
-            let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
-            let mut direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
-            let mut cloud = baked.cloud;
-            if environment.is_some() {
-                // The environment's light at the surfels, gathered with the
-                // surfels as occluders only (no radiance of their own): with
-                // no bounce, the receivers see only that occlusion.
-                let dark = PointCloud::new(
-                    cloud
-                        .surfels()
-                        .iter()
-                        .map(|s| Surfel {
-                            radiance: Vec3::ZERO,
-                            ..*s
-                        })
-                        .collect(),
-                )?;
-                if opts.bounces == 0 {
-                    cloud = dark;
-                } else {
-                    cloud = gather_bounce(&dark, &direct, &baked.albedo, &Tree::build(&dark), &gopts)?;
-                    direct = cloud.surfels().iter().map(|s| s.radiance).collect();
-                }
+        let (tree, surfels) = match file {
+            None => {
+                let (cloud, tree) = build(scene, opts, &tracer, &lights, &mut stages)?;
+                (tree, cloud.len())
             }
-            let mut tree = Tree::build(&cloud);
-            for _ in 1..opts.bounces.max(1) {
-                cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts)?;
-                tree = Tree::build(&cloud);
+            Some(file) => {
+                check_record(file.bake(), &bake_record(scene, opts))?;
+                loaded_stages(opts, &file, &mut stages);
+                let (_, cloud, tree) = file.into_parts();
+                (tree, cloud.len())
             }
-            stages.push(Stage {
-                name: "extra bounces gathered at surfels",
-                skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
-            });
-            let n = cloud.len();
-            (tree, n)
-        } else {
-            stages.push(Stage {
-                name: "surfels, tree and cuts",
-                skipped: Some("--bounces 0: direct light only".into()),
-            });
-            (Tree::build(&PointCloud::default()), 0)
         };
         let pre = t_pre.elapsed().as_secs_f64();
         stages.push(Stage {
@@ -246,20 +183,36 @@ impl<'s> Frame<'s> {
         Gather::new(&self.tree, &gather_options(&self.opts, scheme, &self.environment))
     }
 
-    /// Number of 4×4-pixel tiles.
-    pub(crate) fn tiles(&self) -> usize {
+    /// The window rendered: the crop, or the whole frame.
+    pub(crate) fn window(&self) -> Crop {
         let c = &self.scene.camera;
-        (c.width.div_ceil(4) * c.height.div_ceil(4)) as usize
+        self.opts.crop.unwrap_or(Crop::full(c.width, c.height))
     }
 
-    /// The pixels `(x, y)` of `tile`, row by row (fewer at the image's edges).
+    /// The 4×4-pixel tiles of the frame's grid that meet the window: first
+    /// column and row, and how many across and down. A crop keeps the full
+    /// frame's grid, so its tiles' packets are the frame's, less the pixels
+    /// outside it.
+    fn tile_grid(&self) -> (u32, u32, u32, u32) {
+        let w = self.window();
+        let (tx, ty) = (w.x0 / 4, w.y0 / 4);
+        (tx, ty, w.x1.div_ceil(4) - tx, w.y1.div_ceil(4) - ty)
+    }
+
+    /// Number of 4×4-pixel tiles in the window.
+    pub(crate) fn tiles(&self) -> usize {
+        let (_, _, nx, ny) = self.tile_grid();
+        (nx * ny) as usize
+    }
+
+    /// The pixels `(x, y)` of `tile`, row by row (fewer at the window's edges).
     pub(crate) fn tile_pixels(&self, tile: usize) -> Vec<(u32, u32)> {
-        let c = &self.scene.camera;
-        let tiles_x = c.width.div_ceil(4);
-        let (tx, ty) = ((tile as u32 % tiles_x) * 4, (tile as u32 / tiles_x) * 4);
+        let (tx0, ty0, nx, _) = self.tile_grid();
+        let w = self.window();
+        let (tx, ty) = ((tx0 + tile as u32 % nx) * 4, (ty0 + tile as u32 / nx) * 4);
         (0..16)
             .map(|i| (tx + i % 4, ty + i / 4))
-            .filter(|&(x, y)| x < c.width && y < c.height)
+            .filter(|&(x, y)| w.contains(x, y))
             .collect()
     }
 
@@ -424,7 +377,8 @@ impl<'s> Frame<'s> {
     pub fn render(&self, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<RenderOutput, RenderError> {
         let wall = Instant::now();
         let gather = self.gather()?;
-        let (w, h) = (self.scene.camera.width, self.scene.camera.height);
+        let window = self.window();
+        let (w, h) = (window.width(), window.height());
         let tiles_total = self.tiles();
         progress(0, tiles_total);
         let done = AtomicU64::new(0);

@@ -8,12 +8,15 @@
 //! The files, in data-flow order: `options`; `trace` (ray queries), `light`
 //! (direct light), `bake` (surfels with their direct light), `bounces`
 //! (extra bounces at the surfels, through [`Gather`](crate::gather::Gather));
+//! `baked` (the surfels and tree a render needs, built or read from a tree
+//! file, [`bake_tree`]);
 //! `shading` (shading points), `frame` (the frame, tile by tile, each packet
 //! through a [`Gatherer`](crate::gather::Gatherer));
 //! `image` and `output` (what comes out); `reference` (the path tracer the
 //! report measures against).
 
 mod bake;
+mod baked;
 mod bounces;
 mod frame;
 mod image;
@@ -26,11 +29,12 @@ mod tile;
 mod trace;
 
 pub use bake::{BakeOptions, Baked, bake};
+pub use baked::{bake_record, bake_tree, scene_hash};
 pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
-pub use options::{Component, DEFAULT_SURFEL_BUDGET, RenderOptions};
+pub use options::{Component, Crop, CropError, DEFAULT_SURFEL_BUDGET, RenderOptions};
 pub use output::{RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
 pub(crate) use shading::shading_point;

@@ -94,7 +94,143 @@ pub struct RenderOptions {
     pub component: Component,
     /// Seed of every random choice.
     pub seed: u64,
+    /// Render only this window of the frame (`None`: the whole frame).
+    pub crop: Option<Crop>,
 }
+
+/// A window of the frame: pixels `x0..x1` × `y0..y1` of the full-resolution
+/// image. Each pixel of a cropped render is the same pixel of the full
+/// frame, bit for bit, so tiles rendered apart stitch into the frame.
+///
+/// ```
+/// use pbgi::render::{Crop, CropError};
+///
+/// let crop: Crop = "0,0,128,64".parse()?;
+/// assert_eq!((crop.width(), crop.height()), (128, 64));
+/// assert!(crop.within(256, 256).is_ok());
+/// assert!(matches!(crop.within(100, 100), Err(CropError::OutsideFrame { .. })));
+/// assert!(matches!("5,0,5,8".parse::<Crop>(), Err(CropError::Empty { .. })));
+/// # Ok::<(), CropError>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+/// What is wrong with a crop window.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum CropError {
+    /// Not four whole numbers `x0,y0,x1,y1`.
+    Syntax {
+        /// The text given.
+        text: String,
+    },
+    /// `x0 ≥ x1` or `y0 ≥ y1`: no pixel.
+    Empty {
+        /// The window.
+        crop: Crop,
+    },
+    /// The window reaches past the frame.
+    OutsideFrame {
+        /// The window.
+        crop: Crop,
+        /// The frame's width.
+        width: u32,
+        /// The frame's height.
+        height: u32,
+    },
+}
+
+impl Crop {
+    /// Columns.
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    /// Rows.
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// The whole frame.
+    pub fn full(width: u32, height: u32) -> Crop {
+        Crop {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    /// Checks that the window holds a pixel and lies in a `width × height` frame.
+    pub fn within(self, width: u32, height: u32) -> Result<Crop, CropError> {
+        if self.x0 >= self.x1 || self.y0 >= self.y1 {
+            return Err(CropError::Empty { crop: self });
+        }
+        if self.x1 > width || self.y1 > height {
+            return Err(CropError::OutsideFrame {
+                crop: self,
+                width,
+                height,
+            });
+        }
+        Ok(self)
+    }
+
+    /// Whether pixel `(x, y)` of the frame is in the window.
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        (self.x0..self.x1).contains(&x) && (self.y0..self.y1).contains(&y)
+    }
+}
+
+impl std::fmt::Display for Crop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+impl std::str::FromStr for Crop {
+    type Err = CropError;
+    /// `x0,y0,x1,y1`; an empty window is an error here already.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let v: Vec<u32> = s
+            .split(',')
+            .map(|t| t.trim().parse::<u32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| CropError::Syntax { text: s.into() })?;
+        let [x0, y0, x1, y1] = v[..] else {
+            return Err(CropError::Syntax { text: s.into() });
+        };
+        let crop = Crop { x0, y0, x1, y1 };
+        if crop.width() == 0 || crop.height() == 0 {
+            return Err(CropError::Empty { crop });
+        }
+        Ok(crop)
+    }
+}
+
+impl std::fmt::Display for CropError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CropError::Syntax { text } => write!(f, "crop {text:?}: expected x0,y0,x1,y1 (whole pixels)"),
+            CropError::Empty { crop } => {
+                write!(f, "crop {crop}: empty window (needs x0 < x1 and y0 < y1)")
+            }
+            CropError::OutsideFrame { crop, width, height } => {
+                write!(f, "crop {crop}: outside the {width}×{height} frame")
+            }
+        }
+    }
+}
+
+impl std::error::Error for CropError {}
 
 impl Default for RenderOptions {
     fn default() -> Self {
@@ -112,6 +248,7 @@ impl Default for RenderOptions {
             surfel_light_samples: 16,
             component: Component::All,
             seed: 1,
+            crop: None,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! and which stages ran; and its errors.
 
 use super::image::Image;
+use super::options::CropError;
 use crate::cut::{Scheme, SchemeChoice, TraversalStats};
 use crate::error::Error;
 use crate::scene::SceneError;
@@ -75,6 +76,18 @@ pub enum RenderError {
         /// The value (r, g, b).
         value: [f32; 3],
     },
+    /// The crop window does not fit the frame.
+    Crop(CropError),
+    /// A loaded tree was baked from another scene, or with settings that
+    /// contradict the render's.
+    TreeMismatch {
+        /// The setting (`"scene"`, `"density"`, `"bounces"`, …).
+        setting: &'static str,
+        /// Its value in the tree file.
+        baked: String,
+        /// Its value in this render.
+        render: String,
+    },
 }
 
 impl std::fmt::Display for RenderError {
@@ -86,6 +99,16 @@ impl std::fmt::Display for RenderError {
             RenderError::NonFinite { stage, place, value } => {
                 write!(f, "{stage}: a value that is not finite ({value:?}) at {place}")
             }
+            RenderError::Crop(e) => e.fmt(f),
+            RenderError::TreeMismatch {
+                setting,
+                baked,
+                render,
+            } => write!(
+                f,
+                "the tree was baked with {setting} {baked}, this render has {render}: \
+                 bake it again with the render's settings, or render with the tree's"
+            ),
         }
     }
 }
@@ -95,6 +118,12 @@ impl std::error::Error for RenderError {}
 impl From<Error> for RenderError {
     fn from(e: Error) -> Self {
         RenderError::Kernel(e)
+    }
+}
+
+impl From<CropError> for RenderError {
+    fn from(e: CropError) -> Self {
+        RenderError::Crop(e)
     }
 }
 

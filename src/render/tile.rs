@@ -64,7 +64,8 @@ impl Frame<'_> {
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
         let opts = &self.opts;
-        let w = self.scene.camera.width;
+        let window = self.window();
+        let w = window.width();
         let eye = self.scene.camera.origin;
         let mut stats = TraversalStats::default();
         let mut gatherer = gather.gatherer();
@@ -153,7 +154,7 @@ impl Frame<'_> {
             .zip(adds.chunks(spp))
             .map(|(&(x, y), adds)| {
                 let sum = adds.iter().fold(Vec3::ZERO, |a, &b| a + b);
-                (y * w + x, sum / opts.spp as f32)
+                ((y - window.y0) * w + x - window.x0, sum / opts.spp as f32)
             })
             .collect();
         Ok((out, stats, gathered))

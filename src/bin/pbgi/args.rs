@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use pbgi::render::{DEFAULT_SURFEL_BUDGET, ReferenceOptions, RenderOptions};
+use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
@@ -17,6 +17,8 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene (a name, see `pbgi scenes`, or a Mitsuba XML / OBJ / PLY / OFF / glTF / GLB file).
     Render(RenderArgs),
+    /// Bake a scene's surfels and tree into a file that `pbgi render --tree` reads.
+    Bake(BakeArgs),
     /// Render the ground truth with the path tracer (same scene, camera, bounces).
     Reference(ReferenceArgs),
     /// The paper's Table 1: pre., trav. per scheme, others, speed-ups over scalar.
@@ -255,6 +257,21 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub environment: EnvironmentArgs,
+    /// Surfels and tree from this file (`pbgi bake`) instead of building them.
+    #[arg(long, value_name = "FILE")]
+    pub tree: Option<PathBuf>,
+    /// Render only pixels x0..x1, y0..y1 of the frame (an image of that size).
+    #[arg(long, value_name = "X0,Y0,X1,Y1")]
+    pub crop: Option<Crop>,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+/// Light from outside the scene, for `render` and `bake`.
+#[derive(Args, Clone)]
+pub struct EnvironmentArgs {
     /// A uniform sky of this radiance ("R,G,B" or one value) for what the
     /// scene leaves open; replaces the scene's environment.
     #[arg(long, value_name = "RADIANCE")]
@@ -266,6 +283,23 @@ pub struct RenderArgs {
     /// Factor on the environment map's radiance.
     #[arg(long, default_value_t = 1.0, requires = "envmap")]
     pub envmap_scale: f32,
+}
+
+#[derive(Args, Clone)]
+pub struct BakeArgs {
+    #[arg(default_value = "cornell-box", help = SCENE_HELP)]
+    pub scene: String,
+    /// Output tree file. Default: SCENE.pbgi.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Ambient-occlusion surfels (no radiance), for `render --ao`.
+    #[arg(long)]
+    pub ao: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub environment: EnvironmentArgs,
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -302,6 +336,15 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
             ),
         },
         direct_samples: a.direct_samples,
+        crop: a.crop,
         ..a.settings.options(a.spp)?
+    })
+}
+
+/// What a bake needs of the render options (the camera samples do not matter).
+pub fn bake_options(a: &BakeArgs) -> Res<RenderOptions> {
+    Ok(RenderOptions {
+        ao: a.ao,
+        ..a.settings.options(1)?
     })
 }

@@ -4,18 +4,21 @@
 //! and prints the timing summary in the paper's Table 1 columns.
 
 mod args;
+mod bake;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BenchArgs, Cli, Command, CompareArgs, ReferenceArgs, RenderArgs, ReportArgs, Res, options, parse_choices,
-    parse_schemes,
+    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, ReportArgs, Res,
+    options, parse_choices, parse_schemes,
 };
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
-use pbgi::render::{Image, ReferenceOptions, RenderOptions, RenderOutput, render, render_reference};
+use pbgi::render::{
+    Frame, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
+};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
 use pbgi::scene::resolve;
@@ -24,6 +27,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
+        Some(Command::Bake(args)) => bake::cmd_bake(&args),
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Compare(args)) => cmd_compare(&args),
@@ -40,7 +44,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
+pub(crate) fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         if n == 0 {
@@ -81,10 +85,11 @@ fn tick(bar: &ProgressBar, done: usize, total: usize) {
     }
 }
 
-fn cmd_render(a: &RenderArgs) -> Res<()> {
+/// A scene with the environment the arguments give it.
+pub(crate) fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::scene::Scene> {
     use pbgi::environment::Environment;
-    let mut scene = load_scene(&a.scene)?;
-    if let Some(sky) = &a.sky {
+    let mut scene = load_scene(name)?;
+    if let Some(sky) = &env.sky {
         let v: Vec<f32> = sky
             .split(',')
             .map(|t| t.trim().parse::<f32>())
@@ -97,10 +102,15 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         };
         scene.environment = Some(Environment::uniform(l).map_err(|e| format!("--sky {sky:?}: {e}"))?);
     }
-    if let Some(path) = &a.envmap {
-        let map = pbgi::scene::formats::read_lat_long(path, a.envmap_scale)?;
+    if let Some(path) = &env.envmap {
+        let map = pbgi::scene::formats::read_lat_long(path, env.envmap_scale)?;
         scene.environment = Some(Environment::LatLong(map));
     }
+    Ok(scene)
+}
+
+fn cmd_render(a: &RenderArgs) -> Res<()> {
+    let scene = load_lit_scene(&a.scene, &a.environment)?;
     let opts = a.settings.for_scene(&a.scene, options(a)?);
     let out_path = a
         .output
@@ -108,11 +118,34 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
     check_output(&out_path)?;
     let pool = thread_pool(a.threads)?;
+    let loaded = match &a.tree {
+        Some(path) => Some(bake::load_tree(path)?),
+        None => None,
+    };
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
-    let out = pool.install(|| render(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
+    let progress = |done, total| tick(&bar, done, total);
+    let mut from = None;
+    let out = pool.install(|| match loaded {
+        Some((tree, path, seconds)) => {
+            from = Some((path, seconds));
+            let frame = Frame::with_tree(&scene, &opts, tree).map_err(|e| match e {
+                RenderError::TreeMismatch { .. } => format!("{}: {e}", path.display()).into(),
+                e => Box::<dyn std::error::Error + Send + Sync>::from(e),
+            })?;
+            Ok::<_, Box<dyn std::error::Error + Send + Sync>>(frame.render(&progress)?)
+        }
+        None => Ok(render(&scene, &opts, &progress)?),
+    });
+    let out = out.map_err(|e| e as Box<dyn std::error::Error>)?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
+    if let Some((path, seconds)) = from {
+        println!(
+            "surfels + tree loaded from {} ({seconds:.3} s to read and check)",
+            path.display()
+        );
+    }
     println!(
         "wrote {} (image digest {:016x})",
         out_path.display(),
@@ -279,9 +312,10 @@ fn write_image(img: &Image, path: &Path) -> Res<()> {
 fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
     let c = &scene.camera;
     println!(
-        "pbgi render: {} ({} triangles), {}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",
+        "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",
         scene.name,
         scene.triangle_count(),
+        opts.crop.map(|w| format!("crop {w} of ")).unwrap_or_default(),
         c.width,
         c.height,
         opts.spp,

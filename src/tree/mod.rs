@@ -12,10 +12,18 @@
 //! coincident surfels included). Bounds are computed in `f64` and rounded
 //! outwards to `f32`; every operation is homogeneous in the coordinates, so
 //! scaling the input by `2^k` scales the tree's spheres by exactly `2^k`.
+//!
+//! [`file`] writes the surfels and their tree to a `.pbgi` file and reads it
+//! back, checked whole, so a render can skip building them.
 
 use glam::{DVec3, Vec3};
 
 use crate::points::{PointCloud, Surfel};
+
+mod check;
+pub mod file;
+
+pub use file::{BakeRecord, TreeFile, TreeFileError};
 
 /// Index of a node in a [`Tree`].
 pub type NodeId = u32;

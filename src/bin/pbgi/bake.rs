@@ -1,0 +1,66 @@
+//! `pbgi bake`: the surfels and tree written to a file, and read back for
+//! `pbgi render --tree`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use pbgi::TreeFile;
+use pbgi::render::bake_tree;
+
+use crate::args::{BakeArgs, Res, bake_options};
+use crate::{load_lit_scene, thread_pool};
+
+/// A tree file, read and checked, with the seconds that took.
+pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
+    let t0 = Instant::now();
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    // A device or a pipe could be endless.
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return Err(format!("{}: not a regular file", path.display()).into());
+    }
+    let tree =
+        TreeFile::load(std::io::BufReader::new(file)).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((tree, path, t0.elapsed().as_secs_f64()))
+}
+
+pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
+    let scene = load_lit_scene(&a.scene, &a.environment)?;
+    let opts = bake_options(a)?;
+    let out_path = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}.pbgi", scene.name)));
+    let pool = thread_pool(a.threads)?;
+    let t0 = Instant::now();
+    let file = pool.install(|| bake_tree(&scene, &opts))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let bytes = file.to_bytes();
+    std::fs::write(&out_path, &bytes).map_err(|e| format!("{}: {e}", out_path.display()))?;
+    let b = file.bake();
+    println!(
+        "pbgi bake: {} ({} triangles), {} bounce(s){}, density {}{}",
+        scene.name,
+        scene.triangle_count(),
+        b.bounces,
+        if b.ao { ", ambient occlusion" } else { "" },
+        b.density,
+        if b.gathered {
+            format!(
+                ", gathered at Ω {} and microbuffer {}",
+                b.max_solid_angle, b.microbuffer
+            )
+        } else {
+            String::new()
+        }
+    );
+    println!(
+        "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
+        file.cloud().len(),
+        file.tree().len(),
+        file.tree().depth(),
+        bytes.len() as f64 / 1e6,
+        pool.current_num_threads()
+    );
+    println!("wrote {} (scene hash {:016x})", out_path.display(), b.scene);
+    Ok(())
+}

@@ -1,0 +1,330 @@
+//! The surfels and their tree as a render needs them: built (surfels with
+//! direct light, the environment's light and extra bounces gathered at
+//! them, the tree), or read from a tree file baked earlier ([`bake_tree`],
+//! `pbgi bake`) after checking that it was baked from this scene with these
+//! settings.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::bake::{BakeOptions, bake};
+use super::bounces::gather_bounce;
+use super::light::Lights;
+use super::options::RenderOptions;
+use super::output::{RenderError, Stage};
+use super::trace::Tracer;
+use crate::cut::SchemeChoice;
+use crate::environment::Environment;
+use crate::error::Error;
+use crate::gather::{GatherOptions, ReceiverOrder};
+use crate::points::{PointCloud, Surfel};
+use crate::scene::{Light, Scene};
+use crate::simd::LANES;
+use crate::tree::file::Fnv1a;
+use crate::tree::{BakeRecord, Tree, TreeFile};
+
+/// The gather options of a render: its cut, microbuffer and environment,
+/// over coherent packets (screen tiles; surfels in tree order).
+pub(super) fn gather_options(
+    opts: &RenderOptions,
+    scheme: SchemeChoice,
+    environment: &Option<Arc<Environment>>,
+) -> GatherOptions {
+    GatherOptions {
+        cut: opts.cut,
+        microbuffer: opts.microbuffer,
+        scheme,
+        order: ReceiverOrder::Coherent,
+        environment: environment.clone(),
+    }
+}
+
+/// What the open part of a receiver's hemisphere sees (none in AO mode).
+pub(super) fn environment(scene: &Scene, opts: &RenderOptions) -> Option<Arc<Environment>> {
+    if opts.ao {
+        None
+    } else {
+        scene.environment.clone().map(Arc::new)
+    }
+}
+
+/// Whether the render gathers at all: the environment's light arrives
+/// through the gather, so it needs the surfels (as occluders) even without
+/// bounces.
+pub(super) fn needs_points(opts: &RenderOptions, environment: &Option<Arc<Environment>>) -> bool {
+    opts.ao || opts.bounces > 0 || environment.is_some()
+}
+
+/// Checks the scene and the options a render and a bake share.
+pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
+    scene.validate()?;
+    if opts.spp == 0 {
+        return Err(Error::InvalidParameter {
+            name: "spp",
+            value: "0".into(),
+            expected: "at least 1",
+        }
+        .into());
+    }
+    if let Some(g) = opts.gathers
+        && !(1..=opts.spp).contains(&g)
+    {
+        return Err(Error::InvalidParameter {
+            name: "gathers",
+            value: g.to_string(),
+            expected: "1 to spp",
+        }
+        .into());
+    }
+    opts.surfel_density(scene)?;
+    crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
+    if let Some(crop) = opts.crop {
+        crop.within(scene.camera.width, scene.camera.height)?;
+    }
+    Ok(())
+}
+
+/// Surfels with direct light, the environment's light and extra bounces
+/// gathered at them, and their tree (an empty cloud when the render needs
+/// none); `stages` gets what ran and what was left out.
+pub(super) fn build(
+    scene: &Scene,
+    opts: &RenderOptions,
+    tracer: &Tracer,
+    lights: &Lights,
+    stages: &mut Vec<Stage>,
+) -> Result<(PointCloud, Tree), Error> {
+    let environment = environment(scene, opts);
+    if !needs_points(opts, &environment) {
+        stages.push(Stage {
+            name: "surfels, tree and cuts",
+            skipped: Some("--bounces 0: direct light only".into()),
+        });
+        return Ok((PointCloud::default(), Tree::default()));
+    }
+    let bake_opts = BakeOptions {
+        density: opts.surfel_density(scene)?,
+        light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
+        seed: opts.seed,
+    };
+    let baked = bake(scene, tracer, lights, &bake_opts)?;
+    stages.push(Stage {
+        name: "surfels + direct light at surfels",
+        skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
+    });
+    let scheme = opts.scheme.resolve(LANES);
+    let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
+    let mut direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+    let mut cloud = baked.cloud;
+    if environment.is_some() {
+        // The environment's light at the surfels, gathered with the
+        // surfels as occluders only (no radiance of their own): with
+        // no bounce, the receivers see only that occlusion.
+        let dark = PointCloud::new(
+            cloud
+                .surfels()
+                .iter()
+                .map(|s| Surfel {
+                    radiance: Vec3::ZERO,
+                    ..*s
+                })
+                .collect(),
+        )?;
+        if opts.bounces == 0 {
+            cloud = dark;
+        } else {
+            cloud = gather_bounce(&dark, &direct, &baked.albedo, &Tree::build(&dark), &gopts)?;
+            direct = cloud.surfels().iter().map(|s| s.radiance).collect();
+        }
+    }
+    let mut tree = Tree::build(&cloud);
+    for _ in 1..opts.bounces.max(1) {
+        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts)?;
+        tree = Tree::build(&cloud);
+    }
+    stages.push(Stage {
+        name: "extra bounces gathered at surfels",
+        skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
+    });
+    Ok((cloud, tree))
+}
+
+/// The stages of a render whose surfels and tree were loaded.
+pub(super) fn loaded_stages(opts: &RenderOptions, file: &TreeFile, stages: &mut Vec<Stage>) {
+    if file.cloud().is_empty() {
+        stages.push(Stage {
+            name: "surfels, tree and cuts",
+            skipped: Some("--bounces 0: direct light only".into()),
+        });
+        return;
+    }
+    stages.push(Stage {
+        name: "surfels + direct light at surfels",
+        skipped: Some("loaded with the tree".into()),
+    });
+    stages.push(Stage {
+        name: "extra bounces gathered at surfels",
+        skipped: Some(if opts.bounces <= 1 {
+            format!("--bounces {} needs none", opts.bounces)
+        } else {
+            "baked into the loaded surfels".into()
+        }),
+    });
+}
+
+/// What the surfels' light of a render with `opts` depends on.
+pub fn bake_record(scene: &Scene, opts: &RenderOptions) -> BakeRecord {
+    let environment = environment(scene, opts);
+    let points = needs_points(opts, &environment);
+    let gathered = points && (opts.bounces >= 2 || (environment.is_some() && opts.bounces >= 1));
+    BakeRecord {
+        scene: scene_hash(scene),
+        seed: opts.seed,
+        // The density the surfels were made at (a budget's, over this scene;
+        // an invalid budget is refused by `check_options` first).
+        density: opts.surfel_density(scene).unwrap_or(opts.density),
+        light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
+        bounces: opts.bounces,
+        ao: opts.ao,
+        gathered,
+        max_solid_angle: if gathered { opts.cut.max_solid_angle } else { 0.0 },
+        microbuffer: if gathered { opts.microbuffer as u32 } else { 0 },
+    }
+}
+
+/// Refuses a tree whose record differs from the one this render would bake.
+pub(super) fn check_record(baked: &BakeRecord, render: &BakeRecord) -> Result<(), RenderError> {
+    let pairs: [(&'static str, String, String); 9] = [
+        (
+            "scene (hash of its geometry, materials, lights and environment)",
+            format!("{:016x}", baked.scene),
+            format!("{:016x}", render.scene),
+        ),
+        ("--bounces", baked.bounces.to_string(), render.bounces.to_string()),
+        ("--ao", baked.ao.to_string(), render.ao.to_string()),
+        ("--density", baked.density.to_string(), render.density.to_string()),
+        ("seed", baked.seed.to_string(), render.seed.to_string()),
+        (
+            "light samples per surfel",
+            baked.light_samples.to_string(),
+            render.light_samples.to_string(),
+        ),
+        (
+            "gathers at the surfels (extra bounces, environment)",
+            baked.gathered.to_string(),
+            render.gathered.to_string(),
+        ),
+        (
+            "--max-solid-angle (of the gathers at the surfels)",
+            baked.max_solid_angle.to_string(),
+            render.max_solid_angle.to_string(),
+        ),
+        (
+            "--microbuffer (of the gathers at the surfels)",
+            baked.microbuffer.to_string(),
+            render.microbuffer.to_string(),
+        ),
+    ];
+    // Floats compare by their text, which round-trips: equal text, equal bits.
+    match pairs.into_iter().find(|(_, b, r)| b != r) {
+        Some((setting, baked, render)) => Err(RenderError::TreeMismatch {
+            setting,
+            baked,
+            render,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A hash of everything in `scene` the surfels' light depends on: meshes,
+/// materials, lights, environment (not the names, the camera or the
+/// warnings, so one baked tree serves any view).
+pub fn scene_hash(scene: &Scene) -> u64 {
+    let mut h = Fnv1a::default();
+    let u32s = |h: &mut Fnv1a, v: &[u32]| v.iter().for_each(|x| h.write(&x.to_le_bytes()));
+    let f32s = |h: &mut Fnv1a, v: &[f32]| v.iter().for_each(|x| h.write(&x.to_bits().to_le_bytes()));
+    let vec3s = |h: &mut Fnv1a, v: &[Vec3]| v.iter().for_each(|p| f32s(h, &p.to_array()));
+    u32s(&mut h, &[scene.meshes.len() as u32]);
+    for m in &scene.meshes {
+        u32s(
+            &mut h,
+            &[
+                m.positions.len() as u32,
+                m.triangles.len() as u32,
+                m.material as u32,
+            ],
+        );
+        vec3s(&mut h, &m.positions);
+        m.triangles.iter().for_each(|t| u32s(&mut h, t));
+        match &m.normals {
+            Some(n) => {
+                u32s(&mut h, &[1]);
+                vec3s(&mut h, n);
+            }
+            None => u32s(&mut h, &[0]),
+        }
+        vec3s(&mut h, &[m.emission.unwrap_or(Vec3::splat(-1.0))]);
+    }
+    u32s(&mut h, &[scene.materials.len() as u32]);
+    for m in &scene.materials {
+        vec3s(&mut h, &[m.albedo]);
+        let g = m.glossy.map_or([-1.0; 4], |g| {
+            [g.specular.x, g.specular.y, g.specular.z, g.roughness]
+        });
+        let b = m.bump.map_or([-1.0; 2], |b| [b.amplitude, b.frequency]);
+        f32s(&mut h, &g);
+        f32s(&mut h, &b);
+        u32s(&mut h, &[m.two_sided as u32]);
+    }
+    u32s(&mut h, &[scene.lights.len() as u32]);
+    for l in &scene.lights {
+        let (kind, a, b) = match *l {
+            Light::Point { position, intensity } => (0, position, intensity),
+            Light::Directional {
+                direction,
+                irradiance,
+            } => (1, direction, irradiance),
+        };
+        u32s(&mut h, &[kind]);
+        vec3s(&mut h, &[a, b]);
+    }
+    match &scene.environment {
+        None => u32s(&mut h, &[0]),
+        Some(env) => {
+            let (w, ht, texels) = env.texels();
+            u32s(&mut h, &[1, w as u32, ht as u32]);
+            vec3s(&mut h, texels);
+        }
+    }
+    h.0
+}
+
+/// Bakes the surfels and their tree as a render of `scene` with `opts`
+/// would build them, with the record a render checks them against.
+///
+/// ```
+/// use pbgi::render::{Frame, RenderOptions, bake_tree};
+/// use pbgi::scene::builtin::cornell_box;
+/// use pbgi::tree::TreeFile;
+///
+/// let mut scene = cornell_box();
+/// (scene.camera.width, scene.camera.height) = (8, 8);
+/// let opts = RenderOptions { spp: 1, density: 50.0, ..Default::default() };
+/// let mut bytes = Vec::new();
+/// bake_tree(&scene, &opts)?.save(&mut bytes)?;
+///
+/// let file = TreeFile::load(bytes.as_slice())?;
+/// let loaded = Frame::with_tree(&scene, &opts, file)?.render(&|_, _| {})?;
+/// let built = Frame::prepare(&scene, &opts)?.render(&|_, _| {})?;
+/// assert_eq!(loaded.image, built.image); // bit for bit
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn bake_tree(scene: &Scene, opts: &RenderOptions) -> Result<TreeFile, RenderError> {
+    check_options(scene, opts)?;
+    let tracer = Tracer::new(scene);
+    let lights = Lights::new(scene);
+    let (cloud, tree) = build(scene, opts, &tracer, &lights, &mut Vec::new())?;
+    TreeFile::new(cloud, tree, bake_record(scene, opts))
+        .map_err(|e| RenderError::Check(format!("baked tree: {e}")))
+}

@@ -1,0 +1,551 @@
+//! The baked tree on disk (`.pbgi`): the surfels with their radiance and
+//! the tree over them, so a render (or many, on many machines) skips the
+//! `pre.` stage. std only.
+//!
+//! Layout, every field little-endian:
+//!
+//! | offset | size | field |
+//! | --- | --- | --- |
+//! | 0 | 8 | magic `PBGITREE` |
+//! | 8 | 4 | format version ([`VERSION`]) |
+//! | 12 | 40 | [`BakeRecord`]: scene hash u64, seed u64, density f32, light samples u32, bounces u32, flags u32 (bit 0 AO, bit 1 gathered), Ω f32, microbuffer u32 |
+//! | 52 | 12 | counts: surfels `n`, clusters (facets of the mixed nodes), tree depth (u32 each) |
+//! | 64 | 40 n | surfels: position, normal, radius, radiance |
+//! | | 72 (2n − 1) | nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance |
+//! | | 72 per cluster | facets: 3 × (area-weighted normal, radiance) |
+//! | end − 8 | 8 | FNV-1a 64 of every byte before it |
+//!
+//! A reader checks, in this order, the magic, the version, the counts
+//! against the length (before allocating anything), the checksum, and then
+//! the structure: the tree must be laid out exactly as [`Tree::build`] lays
+//! it out (child links in range, each pair used once, every surfel in one
+//! leaf, the depth within [`MAX_DEPTH`](super::MAX_DEPTH)) and every value finite and in range,
+//! because the kernels index with the child links unchecked.
+
+use std::fmt;
+use std::io::{Read, Write};
+
+use glam::Vec3;
+
+use super::check::{self, Place};
+use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree, field};
+use crate::points::{PointCloud, Surfel};
+
+/// The first eight bytes of a tree file.
+pub const MAGIC: [u8; 8] = *b"PBGITREE";
+/// The format version this library reads and writes.
+pub const VERSION: u32 = 1;
+
+const HEADER: usize = 64;
+const SURFEL: usize = 40;
+const NODE: usize = 72;
+const CLUSTER: usize = 72;
+const CHECKSUM: usize = 8;
+const AO: u32 = 1;
+const GATHERED: u32 = 2;
+
+/// How the surfels' radiance was made, recorded so a render can refuse a
+/// tree that contradicts its own settings. The renderer fills it
+/// (`pbgi::render::bake_tree`); a cloud made another way may leave it
+/// default.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BakeRecord {
+    /// A hash of what the surfels' light depends on in the scene (geometry,
+    /// materials, lights, environment; not the camera).
+    pub scene: u64,
+    /// Seed of the surfels' placement and light samples.
+    pub seed: u64,
+    /// Surfels per unit area.
+    pub density: f32,
+    /// Area-light samples per surfel (0 in AO mode).
+    pub light_samples: u32,
+    /// Indirect bounces the render asked for (those beyond the first are
+    /// gathered into the surfels' radiance).
+    pub bounces: u32,
+    /// Ambient-occlusion mode: the surfels carry no radiance.
+    pub ao: bool,
+    /// Whether the surfels' radiance was gathered through the tree (extra
+    /// bounces, environment light), and so depends on Ω and the microbuffer.
+    pub gathered: bool,
+    /// Ω of the gathers at the surfels.
+    pub max_solid_angle: f32,
+    /// Microbuffer resolution of the gathers at the surfels.
+    pub microbuffer: u32,
+}
+
+/// The surfels and the tree over them, with how they were made: what a
+/// `.pbgi` file holds.
+///
+/// ```
+/// use pbgi::tree::{BakeRecord, TreeFile};
+/// use pbgi::{PointCloud, Surfel, Tree};
+/// use glam::Vec3;
+///
+/// let surfels = (0..10)
+///     .map(|i| Surfel { position: Vec3::new(i as f32, 0.0, 0.0), normal: Vec3::Y, radius: 0.5, radiance: Vec3::ONE })
+///     .collect();
+/// let cloud = PointCloud::new(surfels)?;
+/// let tree = Tree::build(&cloud);
+/// let file = TreeFile::new(cloud, tree, BakeRecord::default()).unwrap();
+/// let mut bytes = Vec::new();
+/// file.save(&mut bytes)?;
+/// let back = TreeFile::load(bytes.as_slice()).unwrap();
+/// assert_eq!(back.tree().len(), 19);
+/// assert_eq!(back.to_bytes(), bytes);
+///
+/// bytes[20] ^= 1; // one flipped bit
+/// assert!(matches!(TreeFile::load(bytes.as_slice()), Err(pbgi::tree::TreeFileError::Checksum { .. })));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct TreeFile {
+    bake: BakeRecord,
+    cloud: PointCloud,
+    tree: Tree,
+}
+
+/// Why a tree file could not be read.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum TreeFileError {
+    /// Reading failed.
+    Io(std::io::Error),
+    /// The file ends at byte `offset`, before the `needed` bytes its header promises.
+    Truncated {
+        /// The file's length.
+        offset: u64,
+        /// The length it should have.
+        needed: u64,
+    },
+    /// Not a tree file: the first eight bytes are not [`MAGIC`].
+    BadMagic {
+        /// The bytes found (fewer for a shorter file).
+        found: Vec<u8>,
+    },
+    /// A version this library does not read.
+    UnsupportedVersion {
+        /// The file's version.
+        found: u32,
+        /// The one read here ([`VERSION`]).
+        supported: u32,
+    },
+    /// Bytes after the checksum, from `offset` on.
+    TrailingBytes {
+        /// Where the file should end.
+        offset: u64,
+    },
+    /// The checksum at `offset` does not match the bytes before it.
+    Checksum {
+        /// Where the checksum is stored.
+        offset: u64,
+        /// The checksum stored.
+        stored: u64,
+        /// The checksum of the bytes.
+        computed: u64,
+    },
+    /// A field is out of range or the tree's structure is broken.
+    Invalid {
+        /// The byte offset of the record (or field) at fault.
+        offset: u64,
+        /// What is wrong.
+        what: String,
+    },
+}
+
+impl fmt::Display for TreeFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TreeFileError::Io(e) => write!(f, "reading the tree file: {e}"),
+            TreeFileError::Truncated { offset, needed } => {
+                write!(
+                    f,
+                    "tree file truncated: it ends at byte {offset}, {needed} bytes expected"
+                )
+            }
+            TreeFileError::BadMagic { found } => write!(
+                f,
+                "not a pbgi tree file (byte 0: {:?}, expected {:?})",
+                String::from_utf8_lossy(found),
+                String::from_utf8_lossy(&MAGIC)
+            ),
+            TreeFileError::UnsupportedVersion { found, supported } => write!(
+                f,
+                "tree file format version {found} at byte 8, this pbgi reads version {supported}: bake it again"
+            ),
+            TreeFileError::TrailingBytes { offset } => {
+                write!(f, "tree file continues past its end at byte {offset}")
+            }
+            TreeFileError::Checksum {
+                offset,
+                stored,
+                computed,
+            } => write!(
+                f,
+                "tree file corrupted: checksum at byte {offset} is {stored:016x}, the bytes give {computed:016x}"
+            ),
+            TreeFileError::Invalid { offset, what } => write!(f, "tree file byte {offset}: {what}"),
+        }
+    }
+}
+
+impl std::error::Error for TreeFileError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            TreeFileError::Io(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// The format's checksum: FNV-1a, 64 bits.
+pub fn checksum(bytes: &[u8]) -> u64 {
+    let mut h = Fnv1a::default();
+    h.write(bytes);
+    h.0
+}
+
+/// FNV-1a, 64 bits, fed piece by piece (the checksum; the renderer's scene hash).
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv1a(pub u64);
+
+impl Default for Fnv1a {
+    fn default() -> Self {
+        Fnv1a(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv1a {
+    /// Adds `bytes`.
+    pub fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+impl TreeFile {
+    /// Surfels, the tree built over them ([`Tree::build`], here or in an
+    /// earlier run) and how they were made. Errors: a tree of another size
+    /// than the cloud's.
+    pub fn new(cloud: PointCloud, tree: Tree, bake: BakeRecord) -> Result<Self, TreeFileError> {
+        let want = (2 * cloud.len()).saturating_sub(1);
+        if tree.len() != want {
+            return Err(TreeFileError::Invalid {
+                offset: 0,
+                what: format!(
+                    "a tree of {} nodes over {} surfels (expected {want})",
+                    tree.len(),
+                    cloud.len()
+                ),
+            });
+        }
+        Ok(Self { bake, cloud, tree })
+    }
+
+    /// How the surfels were made.
+    pub fn bake(&self) -> &BakeRecord {
+        &self.bake
+    }
+
+    /// The surfels.
+    pub fn cloud(&self) -> &PointCloud {
+        &self.cloud
+    }
+
+    /// The tree over them.
+    pub fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
+    /// Gives the parts back.
+    pub fn into_parts(self) -> (BakeRecord, PointCloud, Tree) {
+        (self.bake, self.cloud, self.tree)
+    }
+
+    /// Writes the file.
+    pub fn save(&self, mut w: impl Write) -> std::io::Result<()> {
+        w.write_all(&self.to_bytes())?;
+        w.flush()
+    }
+
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let (tree, n) = (&self.tree, self.cloud.len());
+        let size = HEADER + SURFEL * n + NODE * tree.len() + CLUSTER * tree.cluster.len() + CHECKSUM;
+        let mut out = Vec::with_capacity(size);
+        let b = &self.bake;
+        out.extend_from_slice(&MAGIC);
+        put_u32(&mut out, VERSION);
+        put_u64(&mut out, b.scene);
+        put_u64(&mut out, b.seed);
+        put_f32(&mut out, b.density);
+        put_u32(&mut out, b.light_samples);
+        put_u32(&mut out, b.bounces);
+        put_u32(
+            &mut out,
+            if b.ao { AO } else { 0 } | if b.gathered { GATHERED } else { 0 },
+        );
+        put_f32(&mut out, b.max_solid_angle);
+        put_u32(&mut out, b.microbuffer);
+        for count in [n, tree.cluster.len(), tree.depth()] {
+            put_u32(&mut out, count as u32);
+        }
+        for s in self.cloud.surfels() {
+            for v in [s.position, s.normal] {
+                v.to_array().iter().for_each(|&x| put_f32(&mut out, x));
+            }
+            put_f32(&mut out, s.radius);
+            s.radiance.to_array().iter().for_each(|&x| put_f32(&mut out, x));
+        }
+        for k in 0..tree.len() as u32 {
+            let (p, slot) = NodeArrays::locate(k);
+            let pair = &tree.nodes.pairs[p];
+            pair.f.iter().for_each(|f| put_f32(&mut out, f[slot]));
+            put_u32(&mut out, pair.child[slot]);
+            let s = &tree.splat[k as usize];
+            put_f32(&mut out, s.area);
+            s.normal.iter().for_each(|&x| put_f32(&mut out, x));
+            put_u32(&mut out, s.kind);
+            tree.radiance[k as usize]
+                .to_array()
+                .iter()
+                .for_each(|&x| put_f32(&mut out, x));
+        }
+        for c in &tree.cluster {
+            c.facet.iter().flatten().for_each(|&x| put_f32(&mut out, x));
+        }
+        let sum = checksum(&out);
+        put_u64(&mut out, sum);
+        debug_assert_eq!(out.len(), size);
+        out
+    }
+
+    /// Reads a file written by [`save`](Self::save), checking it whole
+    /// (see the module's notes) before anything uses it.
+    /// It reads the header, then at most the length the header gives (and
+    /// one byte more, to see trailing bytes): an endless stream is not read
+    /// whole.
+    pub fn load(mut r: impl Read) -> Result<Self, TreeFileError> {
+        let mut bytes = Vec::new();
+        let io = TreeFileError::Io;
+        r.by_ref()
+            .take(HEADER as u64)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() == HEADER && bytes[..8] == MAGIC && bytes[8..12] == VERSION.to_le_bytes() {
+            let more = file_len(&bytes) - HEADER as u64 + 1;
+            r.take(more).read_to_end(&mut bytes).map_err(io)?;
+        }
+        Self::from_bytes(&bytes)
+    }
+
+    /// [`load`](Self::load) from bytes in memory.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, TreeFileError> {
+        let len = bytes.len() as u64;
+        if bytes.len() < MAGIC.len() || bytes[..8] != MAGIC {
+            let head = &bytes[..bytes.len().min(8)];
+            return Err(if MAGIC.starts_with(head) {
+                TreeFileError::Truncated {
+                    offset: len,
+                    needed: 8,
+                }
+            } else {
+                TreeFileError::BadMagic { found: head.to_vec() }
+            });
+        }
+        if bytes.len() < 12 {
+            return Err(TreeFileError::Truncated {
+                offset: len,
+                needed: 12,
+            });
+        }
+        let mut rd = Reader { bytes, at: 8 };
+        let version = rd.u32();
+        if version != VERSION {
+            return Err(TreeFileError::UnsupportedVersion {
+                found: version,
+                supported: VERSION,
+            });
+        }
+        if bytes.len() < HEADER {
+            return Err(TreeFileError::Truncated {
+                offset: len,
+                needed: HEADER as u64,
+            });
+        }
+        let scene = rd.u64();
+        let seed = rd.u64();
+        let density = rd.f32();
+        let light_samples = rd.u32();
+        let bounces = rd.u32();
+        let flags = rd.u32();
+        let max_solid_angle = rd.f32();
+        let microbuffer = rd.u32();
+        let (n, clusters, depth) = (rd.u32() as u64, rd.u32() as u64, rd.u32());
+        let nodes = (2 * n).saturating_sub(1);
+        let needed = file_len(bytes);
+        if len < needed {
+            return Err(TreeFileError::Truncated { offset: len, needed });
+        }
+        if len > needed {
+            return Err(TreeFileError::TrailingBytes { offset: needed });
+        }
+        let end = bytes.len() - CHECKSUM;
+        let stored = u64::from_le_bytes(bytes[end..].try_into().expect("8 bytes"));
+        let computed = checksum(&bytes[..end]);
+        if stored != computed {
+            return Err(TreeFileError::Checksum {
+                offset: end as u64,
+                stored,
+                computed,
+            });
+        }
+        let invalid = |offset: usize, what: String| TreeFileError::Invalid {
+            offset: offset as u64,
+            what,
+        };
+        if flags & !(AO | GATHERED) != 0 {
+            return Err(invalid(40, format!("unknown flags {flags:#x}")));
+        }
+        if n > PointCloud::MAX_SURFELS as u64 {
+            return Err(invalid(
+                52,
+                format!("{n} surfels, at most {} supported", PointCloud::MAX_SURFELS),
+            ));
+        }
+        let bake = BakeRecord {
+            scene,
+            seed,
+            density,
+            light_samples,
+            bounces,
+            ao: flags & AO != 0,
+            gathered: flags & GATHERED != 0,
+            max_solid_angle,
+            microbuffer,
+        };
+
+        let surfels: Vec<Surfel> = (0..n)
+            .map(|_| Surfel {
+                position: rd.vec3(),
+                normal: rd.vec3(),
+                radius: rd.f32(),
+                radiance: rd.vec3(),
+            })
+            .collect();
+        let cloud = PointCloud::new(surfels).map_err(|e| match e {
+            crate::Error::InvalidSurfel { index, .. } => invalid(HEADER + SURFEL * index, e.to_string()),
+            e => invalid(HEADER, e.to_string()),
+        })?;
+
+        let nodes_at = rd.at;
+        let mut tree = Tree {
+            depth,
+            ..Tree::default()
+        };
+        tree.nodes.pairs = vec![PairRecord::default(); n as usize];
+        for k in 0..nodes as u32 {
+            let (p, slot) = NodeArrays::locate(k);
+            let pair = &mut tree.nodes.pairs[p];
+            for f in pair.f.iter_mut() {
+                f[slot] = rd.f32();
+            }
+            pair.child[slot] = rd.u32();
+            let area = rd.f32();
+            let normal = rd.vec3().to_array();
+            let kind = rd.u32();
+            let f = &pair.f;
+            tree.splat.push(SplatRecord {
+                center: [f[field::CX][slot], f[field::CY][slot], f[field::CZ][slot]],
+                area,
+                normal,
+                kind,
+            });
+            tree.radiance.push(rd.vec3());
+            tree.facets_of.push(if kind == MIXED {
+                tree.cluster.len() as u32
+            } else {
+                u32::MAX
+            });
+            if kind == MIXED {
+                tree.cluster.push(Cluster::NONE);
+            }
+        }
+        let clusters_at = rd.at;
+        if tree.cluster.len() as u64 != clusters {
+            return Err(invalid(
+                56,
+                format!("{clusters} clusters, but {} mixed nodes", tree.cluster.len()),
+            ));
+        }
+        for c in tree.cluster.iter_mut() {
+            for x in c.facet.iter_mut().flatten() {
+                *x = rd.f32();
+            }
+        }
+        check::values(&tree)
+            .and_then(|()| check::structure(&tree, n as usize))
+            .map_err(|fault| {
+                let offset = match fault.place {
+                    Place::Node(k) => nodes_at + NODE * k as usize,
+                    Place::Cluster(i) => clusters_at + CLUSTER * i,
+                    Place::Depth => 60,
+                };
+                invalid(offset, fault.what)
+            })?;
+        Ok(TreeFile { bake, cloud, tree })
+    }
+}
+
+/// The length a file of this header (at least [`HEADER`] bytes) has.
+fn file_len(header: &[u8]) -> u64 {
+    let count = |at: usize| {
+        u64::from(u32::from_le_bytes(
+            header[at..at + 4].try_into().expect("4 bytes"),
+        ))
+    };
+    let (n, clusters) = (count(52), count(56));
+    // At most 2^32 · 184 bytes: no overflow in u64.
+    (HEADER + CHECKSUM) as u64 + (SURFEL + 2 * NODE) as u64 * n - if n > 0 { NODE as u64 } else { 0 }
+        + CLUSTER as u64 * clusters
+}
+
+/// Reads little-endian fields; the caller has checked the length.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let b = self.bytes[self.at..self.at + N]
+            .try_into()
+            .expect("length checked");
+        self.at += N;
+        b
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take())
+    }
+    fn u64(&mut self) -> u64 {
+        u64::from_le_bytes(self.take())
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_le_bytes(self.take())
+    }
+    fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.f32(), self.f32(), self.f32())
+    }
+}
+
+fn put_u32(out: &mut Vec<u8>, v: u32) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_u64(out: &mut Vec<u8>, v: u64) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_f32(out: &mut Vec<u8>, v: f32) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
