@@ -25,7 +25,7 @@ pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
 
 pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let scene = load_lit_scene(&a.scene, &a.environment)?;
-    let opts = bake_options(a)?;
+    let opts = a.settings.for_scene(&a.scene, bake_options(a)?);
     let out_path = a
         .output
         .clone()
