@@ -284,7 +284,7 @@ impl<'s> Frame<'s> {
 
     /// Light samples at each camera sample's receiver.
     pub(crate) fn light_samples(&self) -> u32 {
-        self.opts.direct_samples.unwrap_or(self.opts.spp.min(16))
+        self.opts.light_samples()
     }
 
     /// Emission plus direct light at each point (zero in AO mode).

@@ -34,7 +34,7 @@ pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
-pub use options::{Component, Crop, CropError, DEFAULT_SURFEL_BUDGET, RenderOptions};
+pub use options::{Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, RenderOptions};
 pub use output::{RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
 pub(crate) use shading::shading_point;

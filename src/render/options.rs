@@ -61,6 +61,9 @@ impl std::str::FromStr for Component {
     }
 }
 
+/// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
+
 /// Render settings; the defaults render the Cornell box in about a second.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
@@ -79,7 +82,10 @@ pub struct RenderOptions {
     /// camera samples, picked at random per pixel, estimate it without bias:
     /// the pixel is `Σ direct / spp + Σ indirect / gathers`.
     pub gathers: Option<u32>,
-    /// Light samples per receiver for direct light (`None`: `spp`, at most 16).
+    /// Area-light samples at each camera sample's receiver (`None`:
+    /// [`DEFAULT_LIGHT_SAMPLES`]), independent of the camera samples: direct
+    /// light costs a few shadow rays where a gather costs a microbuffer, so
+    /// its noise is cheap to take out.
     pub direct_samples: Option<u32>,
     /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
     pub ao: bool,
@@ -254,6 +260,11 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
+    /// Area-light samples at each receiver.
+    pub fn light_samples(&self) -> u32 {
+        self.direct_samples.unwrap_or(DEFAULT_LIGHT_SAMPLES)
+    }
+
     /// Surfels per unit area for `scene`: `density`, or the budget over the
     /// scene's surface area ([`Scene::surface_area`]), so that a model in
     /// millimetres gets as many surfels as the same model in metres.

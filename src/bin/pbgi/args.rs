@@ -244,8 +244,8 @@ pub struct RenderArgs {
     /// at every camera sample (the dense render, for validation).
     #[arg(long, default_value = "1")]
     pub gathers: String,
-    /// Light samples at each camera sample's receiver for direct light
-    /// (default: --spp, at most 16).
+    /// Area-light samples at each camera sample's receiver for direct light
+    /// (default 16), stratified over the lights and over the pixel's camera samples.
     #[arg(long)]
     pub direct_samples: Option<u32>,
     /// Ambient occlusion instead of radiance.

@@ -319,7 +319,7 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         c.width,
         c.height,
         opts.spp,
-        opts.direct_samples.unwrap_or(opts.spp.min(16)),
+        opts.light_samples(),
         match opts.gathers {
             Some(g) if g < opts.spp => format!("{g} gather(s) per pixel"),
             _ => "a gather per camera sample".to_string(),
