@@ -20,7 +20,6 @@ use super::light::Lights;
 use super::options::{Crop, RenderOptions};
 use super::output::{RenderError, RenderOutput, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
-use super::tile::TileResult;
 use super::trace::Tracer;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
 use crate::environment::Environment;
@@ -31,6 +30,10 @@ use crate::rng::{Rng, mix};
 use crate::scene::Scene;
 use crate::simd::LANES;
 use crate::tree::{Tree, TreeFile};
+
+/// One tile's pixels (index in the window, radiance), traversal counters
+/// and gathers (`Frame::render_tile`).
+pub(crate) type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
 
 /// Seconds summed over threads.
 #[derive(Default)]

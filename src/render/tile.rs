@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::frame::{Frame, PacketPoint, Timers};
+use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
 use crate::cut::{Receiver, TraversalStats};
@@ -26,9 +26,6 @@ use crate::simd::LANES;
 
 /// Camera samples `(s, point)` of a tile.
 type Samples = Vec<(u32, PacketPoint)>;
-
-/// One tile's pixels (index, radiance), traversal counters and gathers.
-pub(crate) type TileResult = (Vec<(u32, Vec3)>, TraversalStats, usize);
 
 /// Cosine between two normals of one surface.
 const SAME_NORMAL: f32 = 0.995;
