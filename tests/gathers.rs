@@ -24,9 +24,10 @@ fn middle(mut s: Scene, width: u32) -> Scene {
     scene(s, width, width)
 }
 
-fn run(scene: &Scene, gathers: Option<u32>) -> RenderOutput {
+fn run(scene: &Scene, gathers: Option<u32>, density: f32) -> RenderOutput {
     let opts = RenderOptions {
         gathers,
+        density,
         ..Default::default()
     };
     render(scene, &opts, &|_, _| {}).expect("renders")
@@ -63,9 +64,15 @@ fn one_gather_per_pixel_stays_within_one_percent_of_the_dense_image() {
         ("cornell-box", cornell_box()),
         ("cornell-box-glossy", cornell_box_glossy()),
     ] {
-        let s = middle(s, 64);
-        let dense = run(&s, None);
-        let sparse = run(&s, Some(1));
+        // Under emulation (few property cases asked), fewer pixels.
+        let quick = std::env::var("PBGI_QC_TESTS")
+            .ok()
+            .and_then(|s| s.parse::<u64>().ok())
+            .is_some_and(|n| n < 50);
+        let s = middle(s, if quick { 16 } else { 64 });
+        let density = RenderOptions::default().density;
+        let dense = run(&s, None, density);
+        let sparse = run(&s, Some(1), density);
         let (rmse, bias) = relative_error(&luminance(&sparse.image), &luminance(&dense.image));
         println!(
             "{name}: {} of {} receivers gathered, relative RMSE {:.4}, bias {:+.5}",
@@ -105,12 +112,12 @@ fn a_gather_per_camera_sample_is_the_dense_render_bit_for_bit() {
             .flat_map(|p| p.to_array().map(f32::to_bits))
             .collect()
     };
-    let dense = run(&s, None);
-    let every = run(&s, Some(RenderOptions::default().spp));
+    let dense = run(&s, None, 300.0);
+    let every = run(&s, Some(RenderOptions::default().spp), 300.0);
     assert_eq!(bits(&dense), bits(&every));
     assert_eq!(dense.receivers, every.receivers);
     // And fewer gathers give another image (the option is not ignored).
-    assert_ne!(bits(&run(&s, Some(1))), bits(&dense));
+    assert_ne!(bits(&run(&s, Some(1), 300.0)), bits(&dense));
 }
 
 #[test]

@@ -288,31 +288,10 @@ fn sponza_has_colours_per_group_and_a_sun() {
 /// The CLI reads `PBGI_SCENE_DIR` (set for the child only: no shared state
 /// between parallel tests).
 #[cfg(feature = "cli")]
-/// The `pbgi` binary, through cargo's target runner when the tests run
-/// under one (qemu for a cross-compiled target): the binary is built for
-/// the target, not for the machine that spawns it.
-fn pbgi_command() -> std::process::Command {
-    let runner = std::env::vars()
-        .find(|(k, _)| k.starts_with("CARGO_TARGET_") && k.ends_with("_RUNNER"))
-        .map(|(_, v)| v);
-    let bin = env!("CARGO_BIN_EXE_pbgi");
-    match runner.as_deref().map(str::split_whitespace) {
-        Some(mut words) => match words.next() {
-            Some(program) => {
-                let mut c = std::process::Command::new(program);
-                c.args(words).arg(bin);
-                c
-            }
-            None => std::process::Command::new(bin),
-        },
-        None => std::process::Command::new(bin),
-    }
-}
-
 #[test]
 fn the_cli_honours_pbgi_scene_dir() {
     let empty = temp_dir("cli");
-    let out = pbgi_command()
+    let out = common::pbgi_command()
         .args(["render", "bunny", "-o"])
         .arg(empty.join("x.png"))
         .env(catalogue::SCENE_DIR_ENV, &empty)
@@ -325,7 +304,7 @@ fn the_cli_honours_pbgi_scene_dir() {
         err.contains(&empty.join("bunny/bunny.obj").display().to_string()),
         "{err}"
     );
-    let list = pbgi_command()
+    let list = common::pbgi_command()
         .arg("scenes")
         .env(catalogue::SCENE_DIR_ENV, &empty)
         .output()

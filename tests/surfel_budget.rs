@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+mod common;
+
 use pbgi::render::{RenderOptions, render};
 use pbgi::scene::builtin::cornell_box;
 use pbgi::scene::{Light, Scene};
@@ -76,23 +78,6 @@ fn the_budget_holds_in_any_units() {
     assert!(e.contains("surfels"), "{e}");
 }
 
-/// The CLI binary (through the target's runner, as tests/scenes.rs does it).
-fn pbgi() -> std::process::Command {
-    let runner = std::env::vars()
-        .find(|(k, _)| k.starts_with("CARGO_TARGET_") && k.ends_with("_RUNNER"))
-        .map(|(_, v)| v);
-    let bin = env!("CARGO_BIN_EXE_pbgi");
-    let mut words = runner.as_deref().map(str::split_whitespace);
-    match words.as_mut().and_then(|w| w.next()) {
-        Some(program) => {
-            let mut c = std::process::Command::new(program);
-            c.args(words.into_iter().flatten()).arg(bin);
-            c
-        }
-        None => std::process::Command::new(bin),
-    }
-}
-
 #[test]
 fn the_cli_uses_a_budget_for_files_and_says_so() {
     let dir = std::env::temp_dir().join(format!("pbgi-budget-{}", std::process::id()));
@@ -103,7 +88,7 @@ fn the_cli_uses_a_budget_for_files_and_says_so() {
     std::fs::write(&file, quad).unwrap();
     let out: PathBuf = dir.join("quad.png");
     let run = |extra: &[&str]| {
-        let o = pbgi()
+        let o = common::pbgi_command()
             .args(["render", "--spp", "1", "-o"])
             .arg(&out)
             .arg(&file)
@@ -139,7 +124,7 @@ fn a_file_gets_the_default_budget() {
     let file = dir.join("small.off");
     // Tiny: 1 mm on a side in metres, 10⁻⁶ m²: density 2000 would make 2 surfels.
     std::fs::write(&file, "OFF\n3 1 0\n0 0 0\n0.001 0 0\n0 0.001 0\n3 0 1 2\n").unwrap();
-    let o = pbgi()
+    let o = common::pbgi_command()
         .args(["render", "--spp", "1", "-o"])
         .arg(dir.join("small.png"))
         .arg(&file)

@@ -4,7 +4,7 @@
 //! tiles' edges are not on the 4×4 packet grid, so packets are split.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
 /// The measured Cornell box at 30 × 22 pixels (its meshes from tests/data).
 fn small_scene(dir: &Path) -> PathBuf {
@@ -23,10 +23,7 @@ fn small_scene(dir: &Path) -> PathBuf {
 
 /// Runs `pbgi ARGS`, which must succeed; its stdout.
 fn pbgi(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
-        .args(args)
-        .output()
-        .unwrap();
+    let out = common::pbgi_command().args(args).output().unwrap();
     assert!(
         out.status.success(),
         "pbgi {args:?} failed:\n{}",
@@ -109,10 +106,7 @@ fn bad_crops_and_trees_are_errors_naming_them() {
     let scene = small_scene(&dir);
     let scene = scene.to_str().unwrap();
     let fails = |args: &[&str], want: &str| {
-        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
-            .args(args)
-            .output()
-            .unwrap();
+        let out = common::pbgi_command().args(args).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
             !out.status.success() && err.contains(want),

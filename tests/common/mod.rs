@@ -1254,3 +1254,23 @@ pub fn tree_is_finite(tree: &Tree) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// The `pbgi` binary, through cargo's target runner when the tests run
+/// under one (qemu for a cross-compiled target): the binary is built for
+/// the target, not for the machine that spawns it.
+#[cfg(feature = "cli")]
+pub fn pbgi_command() -> std::process::Command {
+    let runner = std::env::vars()
+        .find(|(k, _)| k.starts_with("CARGO_TARGET_") && k.ends_with("_RUNNER"))
+        .map(|(_, v)| v);
+    let bin = env!("CARGO_BIN_EXE_pbgi");
+    let mut words = runner.as_deref().map(str::split_whitespace);
+    match words.as_mut().and_then(|w| w.next()) {
+        Some(program) => {
+            let mut c = std::process::Command::new(program);
+            c.args(words.into_iter().flatten()).arg(bin);
+            c
+        }
+        None => std::process::Command::new(bin),
+    }
+}
