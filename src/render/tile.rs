@@ -51,6 +51,16 @@ impl Record {
     }
 }
 
+/// What a tile's gathers leave: each camera sample's light (`[k * spp +
+/// s]`), each pixel's gathered records, the traversal counters and the
+/// number of receivers gathered.
+struct Gathered {
+    adds: Vec<Vec3>,
+    records: Vec<Vec<Record>>,
+    stats: TraversalStats,
+    count: usize,
+}
+
 impl Frame<'_> {
     /// Renders `tile`: per camera sample its receivers and their direct
     /// light, then the gathers, in packets of up to 16 receivers.
@@ -64,7 +74,6 @@ impl Frame<'_> {
         let window = self.window();
         let w = window.width();
         let eye = self.scene.camera.origin;
-        let mut stats = TraversalStats::default();
         let mut gatherer = gather.gatherer();
         let pixels = self.tile_pixels(tile);
         let spp = opts.spp as usize;
@@ -107,45 +116,31 @@ impl Frame<'_> {
                 }
             }
         }
-        let mut records: Vec<Vec<Record>> = (0..pixels.len()).map(|_| Vec::new()).collect();
-        let mut gathered = first.len();
-        for chunk in first.chunks(LANES) {
-            self.gather_packet(
-                chunk,
-                &pixels,
-                &mut adds,
-                &mut records,
-                &mut gatherer,
-                &mut stats,
-                timers,
-            )?;
-        }
+        let mut acc = Gathered {
+            adds,
+            records: (0..pixels.len()).map(|_| Vec::new()).collect(),
+            stats: TraversalStats::default(),
+            count: 0,
+        };
+        self.gather_all(&first, &pixels, &mut acc, &mut gatherer, timers)?;
         // The other samples reuse a record of their pixel's surface, or
         // gather themselves.
         let mut own = Vec::new();
         for (s, pp) in rest {
             let glossy = self.scene.materials[pp.point.material].lobe().is_some();
-            match records[pp.pixel].iter().find(|r| r.covers(&pp, eye)) {
+            match acc.records[pp.pixel].iter().find(|r| r.covers(&pp, eye)) {
                 Some(r) if !glossy => {
                     if opts.component != Component::Direct {
-                        adds[pp.pixel * spp + s as usize] += self.indirect(&pp, r.e, None);
+                        acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, r.e, None);
                     }
                 }
                 _ => own.push((s, pp)),
             }
         }
-        gathered += own.len();
-        for chunk in own.chunks(LANES) {
-            self.gather_packet(
-                chunk,
-                &pixels,
-                &mut adds,
-                &mut records,
-                &mut gatherer,
-                &mut stats,
-                timers,
-            )?;
-        }
+        self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
+        let Gathered {
+            adds, stats, count, ..
+        } = acc;
         let out = pixels
             .iter()
             .zip(adds.chunks(spp))
@@ -154,47 +149,47 @@ impl Frame<'_> {
                 ((y - window.y0) * w + x - window.x0, sum / opts.spp as f32)
             })
             .collect();
-        Ok((out, stats, gathered))
+        Ok((out, stats, count))
     }
 
-    /// Cuts, splats and convolves one packet of camera samples `(s, point)`
-    /// of `pixels`: adds each one's indirect light to `adds` and keeps its
-    /// irradiance in `records`.
-    #[allow(clippy::too_many_arguments)]
-    fn gather_packet(
+    /// Cuts, splats and convolves camera samples `(s, point)` of `pixels`,
+    /// 16 to a packet: adds each one's indirect light to `acc.adds` and
+    /// keeps its irradiance in `acc.records`.
+    fn gather_all(
         &self,
-        chunk: &[(u32, PacketPoint)],
+        points: &[(u32, PacketPoint)],
         pixels: &[(u32, u32)],
-        adds: &mut [Vec3],
-        records: &mut [Vec<Record>],
+        acc: &mut Gathered,
         gatherer: &mut Gatherer,
-        stats: &mut TraversalStats,
         timers: &Timers,
     ) -> Result<(), RenderError> {
-        let points: Vec<&PacketPoint> = chunk.iter().map(|(_, pp)| pp).collect();
-        let receivers = points
-            .iter()
-            .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
-            .collect::<Result<Vec<_>, _>>()?;
-        let t1 = Instant::now();
-        stats.merge(&gatherer.cut(&receivers)?);
-        let t2 = Instant::now();
-        timers.trav.add((t2 - t1).as_secs_f64());
-        let out = self.gathered(&points, gatherer);
-        timers.others.add(t2.elapsed().as_secs_f64());
         let spp = self.opts.spp as usize;
-        for ((s, pp), (e, l)) in chunk.iter().zip(out) {
-            if !l.is_finite() {
-                return Err(non_finite("gather", pixels, pp, *s, l));
+        for chunk in points.chunks(LANES) {
+            let points: Vec<&PacketPoint> = chunk.iter().map(|(_, pp)| pp).collect();
+            let receivers = points
+                .iter()
+                .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+                .collect::<Result<Vec<_>, _>>()?;
+            let t1 = Instant::now();
+            acc.stats.merge(&gatherer.cut(&receivers)?);
+            let t2 = Instant::now();
+            timers.trav.add((t2 - t1).as_secs_f64());
+            let out = self.gathered(&points, gatherer);
+            timers.others.add(t2.elapsed().as_secs_f64());
+            for ((s, pp), (e, l)) in chunk.iter().zip(out) {
+                if !l.is_finite() {
+                    return Err(non_finite("gather", pixels, pp, *s, l));
+                }
+                if self.opts.component != Component::Direct {
+                    acc.adds[pp.pixel * spp + *s as usize] += l;
+                }
+                acc.records[pp.pixel].push(Record {
+                    position: pp.point.position,
+                    normal: pp.point.normal,
+                    e,
+                });
             }
-            if self.opts.component != Component::Direct {
-                adds[pp.pixel * spp + *s as usize] += l;
-            }
-            records[pp.pixel].push(Record {
-                position: pp.point.position,
-                normal: pp.point.normal,
-                e,
-            });
+            acc.count += chunk.len();
         }
         Ok(())
     }
