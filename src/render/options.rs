@@ -293,10 +293,16 @@ impl RenderOptions {
             });
         }
         let area = scene.surface_area();
-        // No area: no triangle makes a surfel, whatever the density (an
-        // area beyond f64 cannot be sampled anyway: the bake refuses it).
-        if area == 0.0 || !area.is_finite() {
+        // No area: no triangle makes a surfel, whatever the density.
+        if area == 0.0 {
             return Ok(1.0);
+        }
+        if !area.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "surfels",
+                value: budget.to_string(),
+                expected: "a scene of finite area (Scene::validate refuses non-finite coordinates)",
+            });
         }
         Ok((budget as f64 / area).min(f32::MAX as f64) as f32)
     }

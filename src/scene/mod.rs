@@ -236,21 +236,16 @@ impl Scene {
     }
 
     /// Total area of the meshes' triangles (in f64: a model in millimetres
-    /// sums areas of 10⁶ and more); degenerate and non-finite triangles add nothing.
+    /// sums areas of 10⁶ and more). Not finite when a coordinate is not
+    /// (which [`Scene::validate`] refuses); a triangle whose indices are out
+    /// of range (also refused there) adds nothing.
     pub fn surface_area(&self) -> f64 {
         let mut area = 0.0f64;
         for m in &self.meshes {
             for t in &m.triangles {
-                let [a, b, c] = t.map(|i| {
-                    m.positions
-                        .get(i as usize)
-                        .copied()
-                        .unwrap_or(Vec3::ZERO)
-                        .as_dvec3()
-                });
-                let twice = (b - a).cross(c - a).length();
-                if twice.is_finite() {
-                    area += 0.5 * twice;
+                let v = t.map(|i| m.positions.get(i as usize).map(|p| p.as_dvec3()));
+                if let [Some(a), Some(b), Some(c)] = v {
+                    area += 0.5 * (b - a).cross(c - a).length();
                 }
             }
         }

@@ -434,10 +434,14 @@ impl Gltf<'_> {
                 camera.index()
             )));
         }
-        let aspect = p
-            .aspect_ratio()
-            .filter(|a| a.is_finite() && *a > 0.0)
-            .unwrap_or(1.0);
+        // No aspect ratio: the viewer's, here a square frame.
+        let aspect = p.aspect_ratio().unwrap_or(1.0);
+        if !(aspect.is_finite() && aspect > 0.0) {
+            return Err(self.err(format!(
+                "node {node}: camera {} has aspect ratio {aspect}",
+                camera.index()
+            )));
+        }
         self.camera = Some(Camera {
             origin,
             target: origin + forward,
