@@ -2,7 +2,7 @@
 //! the stages a scene does not need are left out; no NaN leaves the renderer.
 
 use glam::{DVec3, Vec3};
-use pbgi::render::{RenderOptions, render};
+use pbgi::render::{Gathers, RenderOptions, render};
 use pbgi::scene::builtin::{cornell_box, cornell_box_glossy};
 use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
@@ -349,9 +349,9 @@ fn a_uniform_sky_lights_the_open_box_by_the_form_factor_of_its_opening() {
     let opts = RenderOptions {
         bounces: 0,
         // A gather at every camera sample: this measures the gather, and at
-        // this test's coarse pixels the irradiance varies across a pixel
-        // more than reuse within it keeps (tests/gathers.rs measures that).
-        gathers: None,
+        // this test's coarse pixels the irradiance varies between pixels
+        // more than interpolation keeps (tests/gathers.rs measures that).
+        gathers: Gathers::All,
         ..Default::default()
     };
     let out = render(&scene, &opts, &|_, _| {}).unwrap();

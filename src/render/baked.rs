@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::bake::{BakeOptions, bake};
 use super::bounces::gather_bounce;
 use super::light::Lights;
-use super::options::RenderOptions;
+use super::options::{Gathers, RenderOptions};
 use super::output::{RenderError, Stage};
 use super::trace::Tracer;
 use crate::cut::SchemeChoice;
@@ -67,15 +67,23 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
         }
         .into());
     }
-    if let Some(g) = opts.gathers
-        && !(1..=opts.spp).contains(&g)
-    {
-        return Err(Error::InvalidParameter {
-            name: "gathers",
-            value: g.to_string(),
-            expected: "1 to spp",
+    if let Gathers::Sparse { spacing, threshold } = opts.gathers {
+        if !(spacing.is_power_of_two() && spacing <= 64) {
+            return Err(Error::InvalidParameter {
+                name: "gather spacing",
+                value: spacing.to_string(),
+                expected: "a power of two from 1 to 64 pixels",
+            }
+            .into());
         }
-        .into());
+        if !(threshold.is_finite() && threshold >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "gather threshold",
+                value: threshold.to_string(),
+                expected: "a finite relative change of at least 0",
+            }
+            .into());
+        }
     }
     opts.surfel_density(scene)?;
     crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;

@@ -55,11 +55,12 @@ pub(crate) struct Timers {
     pub direct: Accum,
 }
 
-/// One receiver of a packet: the pixel of its tile (0..16), where the camera
-/// ray hit, and where its direct-light samples start in its pixel's
+/// One receiver of a packet: the pixel of its tile (0..16), the film point
+/// its camera ray went through, where it hit, and where its direct-light samples start in its pixel's
 /// scrambled (0,2)-sequence (`Lights::reflected`).
 pub(crate) struct PacketPoint {
     pub pixel: usize,
+    pub film: (f32, f32),
     pub point: ShadingPoint,
     pub light_first: u32,
     pub light_scramble: [u32; 2],
@@ -250,6 +251,7 @@ impl<'s> Frame<'s> {
                         let h = mix(self.opts.seed ^ u64::from(pix).wrapping_mul(0xA24B_AED4_963E_E407));
                         points.push(PacketPoint {
                             pixel: k,
+                            film: (fx, fy),
                             point,
                             light_first,
                             light_scramble: [h as u32, (h >> 32) as u32],
@@ -264,25 +266,6 @@ impl<'s> Frame<'s> {
             }
         }
         points
-    }
-
-    /// Which camera samples of each pixel of a tile gather: `gathers`
-    /// consecutive samples (mod `spp`) from a random start per pixel, so
-    /// every stratum is equally likely and the gathered light unbiased.
-    pub(crate) fn gathering(&self, pixels: &[(u32, u32)], gathers: u32) -> Vec<u32> {
-        let (spp, cam) = (self.opts.spp, &self.scene.camera);
-        pixels
-            .iter()
-            .map(|&(x, y)| {
-                let pix = u64::from(y * cam.width + x);
-                let mut rng = Rng::new(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-                if gathers >= spp {
-                    0
-                } else {
-                    (rng.next_u64() % u64::from(spp)) as u32
-                }
-            })
-            .collect()
     }
 
     /// Light samples at each camera sample's receiver.
@@ -341,12 +324,7 @@ impl<'s> Frame<'s> {
     /// [`shade`](Self::shade), with each point's irradiance (or occlusion)
     /// before its material: what a nearby point of the same surface reuses.
     pub(crate) fn gathered(&self, points: &[&PacketPoint], gatherer: &mut Gatherer) -> Vec<(Vec3, Vec3)> {
-        let what = if self.opts.ao {
-            Convolution::Occlusion
-        } else {
-            Convolution::Irradiance
-        };
-        let out = gatherer.shade(what);
+        let out = gatherer.shade(self.convolution());
         let bufs = gatherer.buffers();
         points
             .iter()
@@ -354,6 +332,16 @@ impl<'s> Frame<'s> {
             .zip(out)
             .map(|((pp, mb), e)| (e, self.indirect(pp, e, Some(mb))))
             .collect()
+    }
+
+    /// What a gather's microbuffer is convolved into: irradiance, or
+    /// occlusion in AO mode.
+    pub(crate) fn convolution(&self) -> Convolution {
+        if self.opts.ao {
+            Convolution::Occlusion
+        } else {
+            Convolution::Irradiance
+        }
     }
 
     /// The light `pp` reflects towards the camera from its gathered
@@ -386,11 +374,12 @@ impl<'s> Frame<'s> {
         progress(0, tiles_total);
         let done = AtomicU64::new(0);
         let timers = Timers::default();
+        let lattice = self.lattice(&gather, &timers)?;
 
         let tiles: Vec<TileResult> = (0..tiles_total)
             .into_par_iter()
             .map(|tile| {
-                let out = self.render_tile(tile, &gather, &timers)?;
+                let out = self.render_tile(tile, &gather, lattice.as_ref(), &timers)?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(d as usize, tiles_total);
                 Ok(out)
@@ -400,6 +389,10 @@ impl<'s> Frame<'s> {
         let mut pixels = vec![Vec3::ZERO; (w * h) as usize];
         let mut stats = TraversalStats::default();
         let mut receivers = 0;
+        if let Some(l) = &lattice {
+            stats.merge(&l.stats);
+            receivers += l.count;
+        }
         for (out, st, n) in tiles {
             for (i, c) in out {
                 pixels[i as usize] = c;

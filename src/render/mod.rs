@@ -11,7 +11,8 @@
 //! `baked` (the surfels and tree a render needs, built or read from a tree
 //! file, [`bake_tree`]);
 //! `shading` (shading points), `frame` (the frame, tile by tile, each packet
-//! through a [`Gatherer`](crate::gather::Gatherer));
+//! through a [`Gatherer`](crate::gather::Gatherer)), `sparse` (the lattice of
+//! sparse gathers), `tile` (one tile's camera samples);
 //! `image` and `output` (what comes out); `reference` (the path tracer the
 //! report measures against).
 
@@ -25,6 +26,7 @@ mod options;
 mod output;
 pub mod reference;
 mod shading;
+mod sparse;
 mod tile;
 mod trace;
 
@@ -34,7 +36,9 @@ pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
-pub use options::{Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, RenderOptions};
+pub use options::{
+    Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
+};
 pub use output::{RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
 pub(crate) use shading::shading_point;

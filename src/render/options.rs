@@ -61,6 +61,48 @@ impl std::str::FromStr for Component {
     }
 }
 
+/// Where the indirect light is gathered.
+///
+/// It varies slowly over a surface, so a gather per camera sample is mostly
+/// wasted: [`Gathers::Sparse`] gathers on a lattice of pixel centres and
+/// interpolates, refining the lattice where the geometry or the gathered
+/// light changes (`render::sparse`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Gathers {
+    /// One gather per camera sample: the dense render, for validation.
+    All,
+    /// Gathers `spacing` pixels apart on smooth surfaces (a power of two),
+    /// halved down to one pixel where the corners of a lattice cell lie on
+    /// different surfaces or where two corners' irradiance differs by more
+    /// than `threshold` of their mean.
+    Sparse {
+        /// Pixels between gathers on smooth surfaces: 1, 2, 4, … 64.
+        spacing: u32,
+        /// Relative change of the gathered light that refines a cell.
+        threshold: f32,
+    },
+}
+
+impl Default for Gathers {
+    fn default() -> Self {
+        Gathers::Sparse {
+            spacing: 4,
+            threshold: 0.1,
+        }
+    }
+}
+
+impl std::fmt::Display for Gathers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Gathers::All => f.write_str("every camera sample"),
+            Gathers::Sparse { spacing, threshold } => {
+                write!(f, "sparse, {spacing} px apart, refined at {threshold} change")
+            }
+        }
+    }
+}
+
 /// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 
@@ -77,11 +119,9 @@ pub struct RenderOptions {
     pub bounces: u32,
     /// Camera samples per pixel (antialiasing; each a receiver of direct light).
     pub spp: u32,
-    /// Gathers per pixel, at most `spp` (`None`: one per camera sample).
-    /// The indirect light varies slowly across a pixel, so a few of its
-    /// camera samples, picked at random per pixel, estimate it without bias:
-    /// the pixel is `Σ direct / spp + Σ indirect / gathers`.
-    pub gathers: Option<u32>,
+    /// Where the indirect light is gathered: at a sparse, adaptive lattice
+    /// of pixels (the default) or at every camera sample.
+    pub gathers: Gathers,
     /// Area-light samples at each camera sample's receiver (`None`:
     /// [`DEFAULT_LIGHT_SAMPLES`]), independent of the camera samples: direct
     /// light costs a few shadow rays where a gather costs a microbuffer, so
@@ -246,7 +286,7 @@ impl Default for RenderOptions {
             microbuffer: 24,
             bounces: 1,
             spp: 4,
-            gathers: Some(1),
+            gathers: Gathers::default(),
             direct_samples: None,
             ao: false,
             density: 2000.0,

@@ -1,17 +1,9 @@
 //! One 4×4-pixel tile of a frame: its camera samples, their direct light,
-//! and the gathers that give their indirect light, decoupled from the
-//! camera samples.
-//!
-//! The indirect light varies slowly over a surface, so a pixel gathers at
-//! `gathers` of its camera samples (picked from a random start, every
-//! stratum equally likely), and each other sample reuses the irradiance of
-//! a gathered sample of its pixel that lies on the same surface: the same
-//! plane up to rounding and a normal within [`SAME_NORMAL`]. A sample with no
-//! such neighbour (a pixel across an edge, a contact, a silhouette) or with
-//! a glossy lobe (whose convolution needs its own microbuffer) gathers
-//! itself. The sample's own material reflects the reused irradiance, so a
-//! pixel across a change of albedo stays exact. With every sample gathering
-//! (`RenderOptions::gathers` `None`), this is the dense render, bit for bit.
+//! and their indirect light: interpolated from the frame's lattice of sparse
+//! gathers (`sparse`), or gathered at the sample itself when no lattice
+//! point around it lies on its surface, when its material is glossy or
+//! bumped (`Frame::gathers_per_sample`), or when every sample
+//! gathers (`Gathers::All`, the dense render).
 
 use std::time::Instant;
 
@@ -20,43 +12,15 @@ use glam::Vec3;
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
+use super::sparse::Lattice;
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::simd::LANES;
 
-/// Camera samples `(s, point)` of a tile.
-type Samples = Vec<(u32, PacketPoint)>;
-
-/// Cosine between two normals of one surface.
-const SAME_NORMAL: f32 = 0.995;
-/// Distance off a gathered point's plane, relative to the camera's
-/// distance, that still counts as its plane (rounding only: two surfaces
-/// a pixel straddles are far further apart).
-const SAME_PLANE: f32 = 1e-4;
-
-/// A gathered sample of a pixel: where, and the irradiance (or occlusion)
-/// its microbuffer gave.
-struct Record {
-    position: Vec3,
-    normal: Vec3,
-    e: Vec3,
-}
-
-impl Record {
-    /// Whether `pp` (seen from `eye`) lies on this record's surface.
-    fn covers(&self, pp: &PacketPoint, eye: Vec3) -> bool {
-        let p = &pp.point;
-        self.normal.dot(p.normal) >= SAME_NORMAL
-            && self.normal.dot(p.position - self.position).abs() <= SAME_PLANE * (p.position - eye).length()
-    }
-}
-
 /// What a tile's gathers leave: each camera sample's light (`[k * spp +
-/// s]`), each pixel's gathered records, the traversal counters and the
-/// number of receivers gathered.
+/// s]`), the traversal counters and the number of receivers gathered.
 struct Gathered {
     adds: Vec<Vec3>,
-    records: Vec<Vec<Record>>,
     stats: TraversalStats,
     count: usize,
 }
@@ -68,6 +32,7 @@ impl Frame<'_> {
         &self,
         tile: usize,
         gather: &Gather,
+        lattice: Option<&Lattice>,
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
         let opts = &self.opts;
@@ -77,13 +42,13 @@ impl Frame<'_> {
         let mut gatherer = gather.gatherer();
         let pixels = self.tile_pixels(tile);
         let spp = opts.spp as usize;
-        let gathers = opts.gathers.unwrap_or(opts.spp);
         // What camera sample `s` of pixel `k` adds, at `[k * spp + s]`: its
         // direct light (emission, light samples, or the environment its ray
         // escapes to) and its indirect light.
         let mut adds = vec![Vec3::ZERO; pixels.len() * spp];
-        let start = self.gathering(&pixels, gathers);
-        let (mut first, mut rest): (Samples, Samples) = (Vec::new(), Vec::new());
+        // Samples that gather themselves, and those the lattice serves with
+        // their irradiance.
+        let (mut own, mut served) = (Vec::new(), Vec::new());
         let mut misses = Vec::new();
         for s in 0..opts.spp {
             let t0 = Instant::now();
@@ -108,33 +73,23 @@ impl Frame<'_> {
             }
             if self.needs_points {
                 for pp in points {
-                    if (s + opts.spp - start[pp.pixel]) % opts.spp < gathers {
-                        first.push((s, pp));
-                    } else {
-                        rest.push((s, pp));
+                    let sp = &pp.point;
+                    let per_sample = self.gathers_per_sample(sp.material);
+                    match lattice.filter(|_| !per_sample).and_then(|l| l.irradiance(pp.film, sp.position, sp.normal, eye)) {
+                        Some(e) => served.push((s, pp, e)),
+                        None => own.push((s, pp)),
                     }
                 }
             }
         }
         let mut acc = Gathered {
             adds,
-            records: (0..pixels.len()).map(|_| Vec::new()).collect(),
             stats: TraversalStats::default(),
             count: 0,
         };
-        self.gather_all(&first, &pixels, &mut acc, &mut gatherer, timers)?;
-        // The other samples reuse a record of their pixel's surface, or
-        // gather themselves.
-        let mut own = Vec::new();
-        for (s, pp) in rest {
-            let glossy = self.scene.materials[pp.point.material].lobe().is_some();
-            match acc.records[pp.pixel].iter().find(|r| r.covers(&pp, eye)) {
-                Some(r) if !glossy => {
-                    if opts.component != Component::Direct {
-                        acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, r.e, None);
-                    }
-                }
-                _ => own.push((s, pp)),
+        if opts.component != Component::Direct {
+            for (s, pp, e) in served {
+                acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, e, None);
             }
         }
         self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
@@ -153,8 +108,7 @@ impl Frame<'_> {
     }
 
     /// Cuts, splats and convolves camera samples `(s, point)` of `pixels`,
-    /// 16 to a packet: adds each one's indirect light to `acc.adds` and
-    /// keeps its irradiance in `acc.records`.
+    /// 16 to a packet: adds each one's indirect light to `acc.adds`.
     fn gather_all(
         &self,
         points: &[(u32, PacketPoint)],
@@ -176,18 +130,13 @@ impl Frame<'_> {
             timers.trav.add((t2 - t1).as_secs_f64());
             let out = self.gathered(&points, gatherer);
             timers.others.add(t2.elapsed().as_secs_f64());
-            for ((s, pp), (e, l)) in chunk.iter().zip(out) {
+            for ((s, pp), (_, l)) in chunk.iter().zip(out) {
                 if !l.is_finite() {
                     return Err(non_finite("gather", pixels, pp, *s, l));
                 }
                 if self.opts.component != Component::Direct {
                     acc.adds[pp.pixel * spp + *s as usize] += l;
                 }
-                acc.records[pp.pixel].push(Record {
-                    position: pp.point.position,
-                    normal: pp.point.normal,
-                    e,
-                });
             }
             acc.count += chunk.len();
         }

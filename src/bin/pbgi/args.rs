@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, ReferenceOptions, RenderOptions};
+use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
 
 #[derive(Parser)]
@@ -239,11 +239,19 @@ pub struct RenderArgs {
     /// Stratified camera samples per pixel (antialiasing; each gets direct light).
     #[arg(long, default_value_t = RenderOptions::default().spp)]
     pub spp: u32,
-    /// Gathers per pixel (at most --spp): that many of a pixel's camera
-    /// samples, picked at random, estimate its indirect light; "all" gathers
-    /// at every camera sample (the dense render, for validation).
-    #[arg(long, default_value = "1")]
+    /// Where the indirect light is gathered: "sparse" (a lattice of pixels,
+    /// refined at edges and where the light changes, interpolated at each
+    /// camera sample) or "all" (at every camera sample: the dense render, for
+    /// validation).
+    #[arg(long, default_value = "sparse")]
     pub gathers: String,
+    /// Pixels between sparse gathers on smooth surfaces (a power of two, 1 to 64).
+    #[arg(long, default_value_t = 4)]
+    pub gather_spacing: u32,
+    /// Relative change of the gathered light across a lattice cell that
+    /// refines it (smaller: more gathers, closer to the dense render).
+    #[arg(long, default_value_t = 0.1)]
+    pub gather_threshold: f32,
     /// Area-light samples at each camera sample's receiver for direct light
     /// (default 16), stratified over the lights and over the pixel's camera samples.
     #[arg(long)]
@@ -329,11 +337,12 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         ao: a.ao,
         component: a.component.parse()?,
         gathers: match a.gathers.trim() {
-            "all" => None,
-            g => Some(
-                g.parse()
-                    .map_err(|_| format!("--gathers: {g:?} is neither a count nor \"all\""))?,
-            ),
+            "all" => Gathers::All,
+            "sparse" => Gathers::Sparse {
+                spacing: a.gather_spacing,
+                threshold: a.gather_threshold,
+            },
+            g => return Err(format!("--gathers: {g:?} is neither \"sparse\" nor \"all\"").into()),
         },
         direct_samples: a.direct_samples,
         crop: a.crop,

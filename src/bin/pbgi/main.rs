@@ -17,7 +17,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
 use pbgi::render::{
-    Frame, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
+    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
 };
 use pbgi::report::plot::write_plots;
 use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
@@ -321,8 +321,8 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         opts.spp,
         opts.light_samples(),
         match opts.gathers {
-            Some(g) if g < opts.spp => format!("{g} gather(s) per pixel"),
-            _ => "a gather per camera sample".to_string(),
+            Gathers::All => "a gather per camera sample".to_string(),
+            g => format!("gathers {g}"),
         },
         opts.bounces,
         if opts.ao { ", ambient occlusion" } else { "" }
