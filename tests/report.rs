@@ -176,6 +176,19 @@ fn the_csv_reads_back_what_it_wrote() {
     );
 }
 
+/// The committed Cornell-box report (`pbgi report cornell-box`, README)
+/// reads back and writes the same CSV.
+#[test]
+fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cornell-box/error.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let (scene, points) = from_csv(&text).unwrap();
+    assert_eq!(scene, "cornell-box");
+    assert!(points.iter().any(|p| p.method == Method::PathTracer));
+    assert!(points.iter().filter(|p| p.method == Method::PointBased).count() > 5);
+    assert_eq!(to_csv(&scene, &points), text);
+}
+
 /// A whole sweep on a 16 × 16 Cornell box: every image measured, grouped
 /// by curve, cheapest first; the path tracer's error falls with its spp; a
 /// reference of the wrong size, or a point of 0 spp, stops it before any
