@@ -1,6 +1,6 @@
-//! What the speed costs in accuracy: Table-1 timings per scheme ([`bench`])
+//! What the speed costs in accuracy: Table-1 timings per scheme ([`bench()`])
 //! and the point-based renderer against the path tracer at equal error
-//! ([`error_sweep`], [`equal_error`]).
+//! ([`error_sweep`], [`equal_error()`]).
 //!
 //! The point-based side is a set of curves ([`Curve`]): each holds its
 //! settings (a label and [`RenderOptions`](crate::render::RenderOptions))
