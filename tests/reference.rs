@@ -200,19 +200,6 @@ fn point_based_and_path_traced_cornell_boxes_agree_pixel_by_pixel() {
     }
 }
 
-#[test]
-fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cornell-box/error.csv");
-    let text = std::fs::read_to_string(path).unwrap();
-    let (scene, points) = pbgi::report::from_csv(&text).unwrap();
-    assert_eq!(scene, "cornell-box");
-    assert!(points.len() > 10);
-    assert_eq!(pbgi::report::to_csv(&scene, &points), text);
-    let broken = text.replacen("pbgi,packet", "pbgi,warp", 1);
-    let err = pbgi::report::from_csv(&broken).unwrap_err();
-    assert!(err.starts_with("line 2: unknown scheme"), "{err}");
-}
-
 /// The direct and indirect parts add up to the whole, in both renderers
 /// (same seeds: the same samples, split by the bounces they took).
 #[test]

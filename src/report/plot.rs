@@ -1,7 +1,7 @@
-//! Error against run time on log-log axes: one curve per scheme and
-//! microbuffer resolution (its Ω sweep), the Ω = 0 point, and the path tracer,
-//! written as PNG and SVG. Text uses the embedded DejaVu Sans, so no system
-//! font is needed.
+//! Error against run time on log-log axes: one line per point-based curve
+//! (camera samples per pixel rising along it) and one for the path tracer,
+//! with dashed guides at the equal-error table's errors; written as PNG and
+//! SVG. Text uses the embedded DejaVu Sans, so no system font is needed.
 
 use std::path::Path;
 use std::sync::Once;
@@ -9,64 +9,25 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use super::{ErrorPoint, Method};
-use crate::cut::Scheme;
-use crate::render::RenderError;
+use super::equal_error::series;
+use super::error::ReportError;
+use super::sweep::{ErrorPoint, Method};
 
-/// One curve: name and `(seconds, relative RMSE)` points, sorted by time.
-type Curve = (String, Vec<(f64, f64)>);
+/// One curve: name, whether it is the path tracer's, and `(seconds,
+/// relative RMSE)` points by rising spp.
+type Curve = (String, bool, Vec<(f64, f64)>);
 
-fn curves(points: &[ErrorPoint], microbuffer: usize) -> Vec<Curve> {
-    // Every (scheme, N) swept, the default N first, in the sweep's order.
-    let mut keys: Vec<(Scheme, usize)> = Vec::new();
-    for p in points {
-        if let Method::PointBased {
-            scheme,
-            microbuffer: n,
-            ..
-        } = p.method
-            && !keys.contains(&(scheme, n))
-        {
-            keys.push((scheme, n));
-        }
-    }
-    keys.sort_by_key(|&(s, n)| (n != microbuffer, Scheme::ALL.iter().position(|&x| x == s)));
-    let mut out: Vec<Curve> = Vec::new();
-    let point_based = |keep: &dyn Fn(Scheme, f32, usize) -> bool| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = points
-            .iter()
-            .filter_map(|p| match p.method {
-                Method::PointBased {
-                    scheme,
-                    max_solid_angle,
-                    microbuffer: n,
-                } if keep(scheme, max_solid_angle, n) => Some((p.total_s, p.rel_rmse)),
-                _ => None,
-            })
-            .collect();
-        v.sort_by(|a, b| a.0.total_cmp(&b.0));
-        v
-    };
-    for (scheme, n) in keys {
-        let v = point_based(&|s, max_solid_angle, m| s == scheme && m == n && max_solid_angle > 0.0);
-        if !v.is_empty() {
-            out.push((format!("pbgi {scheme} (Ω sweep, N {n})"), v));
-        }
-    }
-    let zero = point_based(&|_, max_solid_angle, _| max_solid_angle == 0.0);
-    if !zero.is_empty() {
-        out.push(("pbgi Ω = 0 (every leaf splatted)".to_string(), zero));
-    }
-    let mut pt: Vec<(f64, f64)> = points
-        .iter()
-        .filter(|p| matches!(p.method, Method::PathTracer { .. }))
-        .map(|p| (p.total_s, p.rel_rmse))
-        .collect();
-    if !pt.is_empty() {
-        pt.sort_by(|a, b| a.0.total_cmp(&b.0));
-        out.push(("path tracer (spp sweep)".to_string(), pt));
-    }
-    out
+fn curves(points: &[ErrorPoint]) -> Vec<Curve> {
+    series(points)
+        .into_iter()
+        .map(|s| {
+            let name = match s.method {
+                Method::PointBased => format!("pbgi {} (spp sweep)", s.label),
+                Method::PathTracer => format!("{} (spp sweep)", s.label),
+            };
+            (name, s.method == Method::PathTracer, s.time_error())
+        })
+        .collect()
 }
 
 /// A tick label: at most three significant digits, no float noise.
@@ -98,28 +59,38 @@ fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     curves: &[Curve],
+    guides: &[f64],
 ) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
-    let all = curves.iter().flat_map(|c| c.1.iter());
+    let all = curves.iter().flat_map(|c| c.2.iter());
     let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(t, e) in all {
-        if t > 0.0 && e > 0.0 {
+        if t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite() {
             (t0, t1, e0, e1) = (t0.min(t), t1.max(t), e0.min(e), e1.max(e));
         }
     }
     if t0 > t1 {
         return Err("nothing to plot: no point with positive time and error".into());
     }
+    let guides: Vec<f64> = guides
+        .iter()
+        .copied()
+        .filter(|&g| g > 0.0 && g.is_finite())
+        .collect();
+    for &g in &guides {
+        (e0, e1) = (e0.min(g), e1.max(g));
+    }
+    let (x0, x1) = (t0 / 1.5, t1 * 1.5);
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d((t0 / 1.5..t1 * 1.5).log_scale(), (e0 / 1.3..e1 * 1.3).log_scale())
+        .build_cartesian_2d((x0..x1).log_scale(), (e0 / 1.3..e1 * 1.3).log_scale())
         .map_err(err)?;
     chart
         .configure_mesh()
@@ -130,8 +101,32 @@ where
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
-    for (i, (name, pts)) in curves.iter().enumerate() {
-        let color = COLORS[i % COLORS.len()];
+    let grey = RGBColor(0x90, 0x90, 0x90);
+    for &g in &guides {
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(x0, g), (x1, g)],
+                6,
+                4,
+                grey.stroke_width(1),
+            ))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("{} %", tick(&(g * 100.0))),
+                (x0 * 1.05, g * 0.97),
+                ("sans-serif", 13).into_font().color(&grey),
+            )))
+            .map_err(err)?;
+    }
+    let mut next = 0;
+    for (name, path_tracer, pts) in curves {
+        let color = if *path_tracer {
+            BLACK
+        } else {
+            next += 1;
+            COLORS[(next - 1) % COLORS.len()]
+        };
         let pts: Vec<(f64, f64)> = pts.iter().copied().filter(|&(t, e)| t > 0.0 && e > 0.0).collect();
         chart
             .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
@@ -162,27 +157,36 @@ fn register_font() {
     });
 }
 
-/// Writes the error-against-time plot of `points` to `png` and `svg`: the
-/// Ω sweep of each scheme at microbuffer resolution `microbuffer`, those at
-/// the other resolutions swept, the Ω = 0 point and the path tracer's spp
-/// sweep.
+/// Writes the error-against-time plot of `points` to `png` and `svg`: one
+/// line per curve, dashed guides at `guides` (relative RMSE, e.g. the
+/// equal-error table's).
 pub fn write_plots(
     points: &[ErrorPoint],
-    microbuffer: usize,
+    guides: &[f64],
     title: &str,
     png: &Path,
     svg: &Path,
-) -> Result<(), RenderError> {
+) -> Result<(), ReportError> {
     register_font();
-    let curves = curves(points, microbuffer);
-    let fail = |path: &Path, e: String| RenderError::Check(format!("{}: {e}", path.display()));
+    let curves = curves(points);
+    let fail = |path: &Path, message: String| ReportError::Plot {
+        path: path.to_path_buf(),
+        message,
+    };
     let (w, h) = (900u32, 620u32);
-    draw(SVGBackend::new(svg, (w, h)).into_drawing_area(), title, &curves).map_err(|e| fail(svg, e))?;
+    draw(
+        SVGBackend::new(svg, (w, h)).into_drawing_area(),
+        title,
+        &curves,
+        guides,
+    )
+    .map_err(|e| fail(svg, e))?;
     let mut buf = vec![0u8; (w * h * 3) as usize];
     draw(
         BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area(),
         title,
         &curves,
+        guides,
     )
     .map_err(|e| fail(png, e))?;
     image::save_buffer(png, &buf, w, h, image::ExtendedColorType::Rgb8)

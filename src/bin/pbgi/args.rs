@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, ReferenceOptions, RenderOptions};
-use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
+use pbgi::{CutOptions, Isa, SchemeChoice};
 
 #[derive(Parser)]
 #[command(name = "pbgi", version, about = "Point-based global illumination renderer")]
@@ -25,7 +25,7 @@ pub enum Command {
     Bench(BenchArgs),
     /// Relative RMSE and bias of an image against a reference, emitters left out.
     Compare(CompareArgs),
-    /// Error against run time: sweeps Ω, microbuffer and schemes against a path-traced reference.
+    /// Point-based GI against the path tracer at equal error: curves of error against run time.
     Report(ReportArgs),
     /// List the scene names: built-in, and fetched ones with whether their files are present.
     Scenes,
@@ -72,34 +72,38 @@ pub struct ReportArgs {
     /// Output folder for error.csv, error.md, error.png, error.svg.
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
-    /// Ω values to sweep (comma-separated).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "0.3,0.1,0.05,0.02,0.01,0.005,0.002,0.001"
-    )]
+    /// Camera samples per pixel along each point-based curve (comma-separated;
+    /// default 1,2,4,8,16, the default curves of Ω 0.4× and dense gathers a part of it).
+    #[arg(long, value_delimiter = ',')]
+    pub spp: Option<Vec<u32>>,
+    /// Paths per pixel along the path tracer's curve (comma-separated; default
+    /// 16,64,256,1024, with --full 1,4,16,64,256,1024).
+    #[arg(long, value_delimiter = ',')]
+    pub path_tracer_spp: Option<Vec<u32>>,
+    /// Relative RMSE of the equal-error table, in percent (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "5,3,2")]
+    pub targets: Vec<f64>,
+    /// The old, long sweep: Ω 0.3 … 0.001 × microbuffer 8, 16 and the default's, each a curve.
+    #[arg(long)]
+    pub full: bool,
+    /// Curves at these Ω (comma-separated; with the other lists, one curve per combination).
+    #[arg(long, value_delimiter = ',')]
     pub max_solid_angles: Vec<f32>,
-    /// Microbuffer resolutions swept besides the default (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "8,16")]
+    /// Curves at these microbuffer resolutions (comma-separated).
+    #[arg(long, value_delimiter = ',')]
     pub microbuffers: Vec<usize>,
-    /// Schemes to time (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "scalar,single,packet,hybrid")]
+    /// Curves at these gathers: "sparse", a sparse spacing in pixels, or "all" for dense (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub gathers: Vec<String>,
+    /// Curves for these schemes (comma-separated; same images, other times).
+    #[arg(long, value_delimiter = ',')]
     pub schemes: Vec<String>,
-    /// Path tracer's spp sweep (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
-    pub path_tracer_spp: Vec<u32>,
-    /// Redraw error.png and error.svg from OUT/error.csv (a finished sweep) without rendering.
+    /// Redraw error.png and error.svg from OUT/error.csv (a finished sweep) and print its table, without rendering.
     #[arg(long)]
     pub replot: bool,
-    /// Leave out the Ω = 0 image (every leaf splatted; the slowest point).
+    /// Light samples per receiver for direct light (default: as `pbgi render`).
     #[arg(long)]
-    pub no_max_solid_angle_zero: bool,
-    /// Camera samples per pixel of the point-based images.
-    #[arg(long, default_value_t = RenderOptions::default().spp)]
-    pub spp: u32,
-    /// Light samples per receiver for direct light.
-    #[arg(long, default_value_t = 16)]
-    pub direct_samples: u32,
+    pub direct_samples: Option<u32>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -169,8 +173,17 @@ impl Settings {
     }
 }
 
-pub fn parse_schemes(names: &[String]) -> Res<Vec<Scheme>> {
-    names.iter().map(|n| Ok(n.trim().parse::<Scheme>()?)).collect()
+/// `--gathers`: "all" (every camera sample gathers), "sparse" (the default
+/// lattice), or a number: sparse gathers that many pixels apart.
+pub fn parse_gathers(g: &str) -> Res<Gathers> {
+    match g.trim() {
+        "all" => Ok(Gathers::All),
+        "sparse" => Ok(Gathers::default()),
+        g => match (g.parse(), Gathers::default()) {
+            (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
+            _ => Err(format!("--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels").into()),
+        },
+    }
 }
 
 /// Scheme names, `auto` included.
@@ -336,13 +349,17 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         scheme: a.scheme.parse()?,
         ao: a.ao,
         component: a.component.parse()?,
-        gathers: match a.gathers.trim() {
-            "all" => Gathers::All,
-            "sparse" => Gathers::Sparse {
-                spacing: a.gather_spacing,
+        gathers: match parse_gathers(&a.gathers)? {
+            // `--gathers 8` is `--gathers sparse --gather-spacing 8`.
+            Gathers::Sparse { spacing, .. } => Gathers::Sparse {
+                spacing: if a.gathers.trim() == "sparse" {
+                    a.gather_spacing
+                } else {
+                    spacing
+                },
                 threshold: a.gather_threshold,
             },
-            g => return Err(format!("--gathers: {g:?} is neither \"sparse\" nor \"all\"").into()),
+            g => g,
         },
         direct_samples: a.direct_samples,
         crop: a.crop,

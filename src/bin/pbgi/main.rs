@@ -5,13 +5,14 @@
 
 mod args;
 mod bake;
+mod report;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, ReportArgs, Res,
-    options, parse_choices, parse_schemes,
+    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, Res, options,
+    parse_choices,
 };
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -19,8 +20,7 @@ use pbgi::SchemeChoice;
 use pbgi::render::{
     Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
 };
-use pbgi::report::plot::write_plots;
-use pbgi::report::{BenchOptions, BenchRow, SweepOptions, bench, error_sweep, to_csv, to_markdown};
+use pbgi::report::{BenchOptions, BenchRow, bench};
 use pbgi::scene::resolve;
 
 fn main() -> ExitCode {
@@ -31,7 +31,7 @@ fn main() -> ExitCode {
         Some(Command::Reference(args)) => cmd_reference(&args),
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Compare(args)) => cmd_compare(&args),
-        Some(Command::Report(args)) => cmd_report(&args),
+        Some(Command::Report(args)) => report::cmd_report(&args),
         Some(Command::Scenes) => cmd_scenes(),
         None => cmd_render(&RenderArgs::default()),
     };
@@ -477,119 +477,4 @@ fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
         height: size.height() as u32,
         pixels,
     })
-}
-
-fn cmd_report(a: &ReportArgs) -> Res<()> {
-    if a.replot {
-        let csv = a.out.join("error.csv");
-        let text = std::fs::read_to_string(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
-        let (scene, points) = pbgi::report::from_csv(&text).map_err(|e| format!("{}: {e}", csv.display()))?;
-        let (png, svg) = (a.out.join("error.png"), a.out.join("error.svg"));
-        write_plots(
-            &points,
-            a.settings.microbuffer,
-            &format!("{scene}: relative RMSE against time"),
-            &png,
-            &svg,
-        )?;
-        println!("wrote {}, {}", png.display(), svg.display());
-        return Ok(());
-    }
-    let scene = load_scene(&a.scene)?;
-    let pool = thread_pool(a.threads)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
-    let (ref_path, given) = match &a.reference {
-        Some(p) => (p.clone(), true),
-        None => (a.out.join("reference.exr"), false),
-    };
-    let mut reference_spp = None;
-    let reference = if ref_path.exists() {
-        println!("reference: {}", ref_path.display());
-        read_exr(&ref_path)?
-    } else if given {
-        return Err(format!("{}: no such reference image", ref_path.display()).into());
-    } else {
-        let bar = progress_bar(
-            "rows",
-            format!("path tracing the reference, {} spp", a.reference_spp),
-        );
-        let opts = ReferenceOptions {
-            spp: a.reference_spp,
-            bounces: a.settings.bounces as i32,
-            ..Default::default()
-        };
-        let out = pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
-        bar.finish_and_clear();
-        write_image(&out.image, &ref_path)?;
-        println!(
-            "reference: path traced at {} spp in {:.1} s, wrote {}",
-            a.reference_spp,
-            out.seconds,
-            ref_path.display()
-        );
-        reference_spp = Some(a.reference_spp);
-        out.image
-    };
-    let (cw, ch) = (scene.camera.width, scene.camera.height);
-    if (reference.width, reference.height) != (cw, ch) {
-        return Err(format!(
-            "{}: the reference is {}×{}, the scene's camera {cw}×{ch}",
-            ref_path.display(),
-            reference.width,
-            reference.height
-        )
-        .into());
-    }
-    let mut render_opts = a.settings.for_scene(&a.scene, a.settings.options(a.spp)?);
-    render_opts.direct_samples = Some(a.direct_samples);
-    let sweep = SweepOptions {
-        render: render_opts,
-        max_solid_angles: a.max_solid_angles.clone(),
-        microbuffers: a.microbuffers.clone(),
-        schemes: parse_schemes(&a.schemes)?,
-        max_solid_angle_zero: !a.no_max_solid_angle_zero,
-        path_tracer_spp: a.path_tracer_spp.clone(),
-        bounces: a.settings.bounces,
-    };
-    let bar = progress_bar("images", format!("error sweep of {}", scene.name));
-    bar.set_length(sweep.len() as u64);
-    let points = pool.install(|| {
-        error_sweep(&scene, &reference, &sweep, &|done, _, what| {
-            bar.set_position(done as u64);
-            bar.set_message(what.to_string());
-        })
-    })?;
-    bar.finish_and_clear();
-    let files = [
-        ("error.csv", to_csv(&scene.name, &points)),
-        (
-            "error.md",
-            to_markdown(&scene.name, &points, &render_opts, reference_spp),
-        ),
-    ];
-    for (name, text) in &files {
-        let p = a.out.join(name);
-        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
-    }
-    let (png, svg) = (a.out.join("error.png"), a.out.join("error.svg"));
-    write_plots(
-        &points,
-        render_opts.microbuffer,
-        &format!(
-            "{}: relative RMSE against time ({} thread(s))",
-            scene.name,
-            pool.current_num_threads()
-        ),
-        &png,
-        &svg,
-    )?;
-    print!("{}", files[1].1);
-    println!(
-        "wrote {}, {}, {}, {}",
-        a.out.join("error.csv").display(),
-        a.out.join("error.md").display(),
-        png.display(),
-        svg.display()
-    );
-    Ok(())
 }

@@ -1,0 +1,134 @@
+//! A sweep as CSV and back, so tables and plots can be redrawn without
+//! rendering again. Fields holding a comma or a quote are quoted (RFC 4180):
+//! scene names come from file names, labels from the settings.
+
+use std::fmt::Write as _;
+
+use super::error::ReportError;
+use super::sweep::{ErrorPoint, Method};
+
+const HEADER: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse";
+
+fn field(s: &str) -> String {
+    // A line break would end the line: it becomes a space.
+    let s = s.replace(['\n', '\r'], " ");
+    if s.contains([',', '"']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s
+    }
+}
+
+/// The fields of one line, quotes undone; `None` if a quote is left open
+/// or a quoted field runs into more text.
+fn split(line: &str) -> Option<Vec<String>> {
+    let mut fields = Vec::new();
+    let mut chars = line.chars().peekable();
+    loop {
+        let mut f = String::new();
+        if chars.peek() == Some(&'"') {
+            chars.next();
+            loop {
+                match chars.next()? {
+                    '"' if chars.peek() == Some(&'"') => {
+                        chars.next();
+                        f.push('"');
+                    }
+                    '"' => break,
+                    c => f.push(c),
+                }
+            }
+            if !matches!(chars.peek(), None | Some(',')) {
+                return None;
+            }
+        } else {
+            while let Some(&c) = chars.peek() {
+                if c == ',' {
+                    break;
+                }
+                f.push(c);
+                chars.next();
+            }
+        }
+        fields.push(f);
+        if chars.next().is_none() {
+            return Some(fields);
+        }
+    }
+}
+
+/// The sweep as CSV: a header, then one line per image.
+pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
+    let mut s = format!("{HEADER}\n");
+    for p in points {
+        let method = match p.method {
+            Method::PointBased => "pbgi",
+            Method::PathTracer => "path-tracer",
+        };
+        let _ = writeln!(
+            s,
+            "{},{method},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            field(scene),
+            field(&p.label),
+            p.spp,
+            p.pre_s,
+            p.trav_s,
+            p.others_s,
+            p.total_s,
+            p.rel_rmse
+        );
+    }
+    s
+}
+
+/// Reads back what [`to_csv`] wrote: the scene's name and the points. A
+/// line that cannot be read is a [`ReportError::Csv`] naming it.
+pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
+    let mut lines = text.lines().enumerate();
+    let bad = |i: usize, what: &'static str, line: &str| ReportError::Csv {
+        line: i + 1,
+        what,
+        text: line.to_string(),
+    };
+    match lines.next() {
+        Some((_, h)) if h.trim() == HEADER => {}
+        h => {
+            return Err(bad(
+                0,
+                "not the header of an error sweep's CSV",
+                h.map_or("", |h| h.1),
+            ));
+        }
+    }
+    let mut scene = String::new();
+    let mut points = Vec::new();
+    for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
+        let f = split(line).ok_or_else(|| bad(i, "a quote left open", line))?;
+        if f.len() != 9 {
+            return Err(bad(i, "expected 9 fields", line));
+        }
+        let num = |k: usize| {
+            f[k].parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| bad(i, "not a finite number", line))
+        };
+        let method = match f[1].as_str() {
+            "pbgi" => Method::PointBased,
+            "path-tracer" => Method::PathTracer,
+            _ => return Err(bad(i, "unknown method", line)),
+        };
+        scene.clone_from(&f[0]);
+        points.push(ErrorPoint {
+            method,
+            label: f[2].clone(),
+            spp: f[3].parse().map_err(|_| bad(i, "bad spp", line))?,
+            pre_s: num(4)?,
+            trav_s: num(5)?,
+            others_s: num(6)?,
+            total_s: num(7)?,
+            rel_rmse: num(8)?,
+        });
+    }
+    Ok((scene, points))
+}

@@ -1,0 +1,160 @@
+//! Time at equal error: where each curve reaches a given relative RMSE, and
+//! how much sooner the point-based renderer gets there than the path tracer.
+
+use super::sweep::{ErrorPoint, Method};
+
+/// One curve of a sweep's points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Which renderer.
+    pub method: Method,
+    /// The curve's label.
+    pub label: String,
+    /// `(spp, seconds, relative RMSE)`, by rising spp (the cost along it).
+    pub points: Vec<(u32, f64, f64)>,
+}
+
+impl Series {
+    /// `(seconds, error)` along the curve.
+    pub fn time_error(&self) -> Vec<(f64, f64)> {
+        self.points.iter().map(|&(_, t, e)| (t, e)).collect()
+    }
+}
+
+/// The curves of `points`, in order of first appearance.
+pub fn series(points: &[ErrorPoint]) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for p in points {
+        let point = (p.spp, p.total_s, p.rel_rmse);
+        match out
+            .iter_mut()
+            .find(|s| s.method == p.method && s.label == p.label)
+        {
+            Some(s) => s.points.push(point),
+            None => out.push(Series {
+                method: p.method,
+                label: p.label.clone(),
+                points: vec![point],
+            }),
+        }
+    }
+    for s in &mut out {
+        s.points.sort_by_key(|p| p.0);
+    }
+    out
+}
+
+/// When a curve reaches an error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Whether it lies beyond the measured points (extrapolated along
+    /// error ∝ 1/√t) rather than between two of them.
+    pub extrapolated: bool,
+}
+
+/// The time at which a curve of `(seconds, error)` points, in order of rising
+/// cost, first reaches `error`: between the two points that bracket it,
+/// log(time) interpolated linearly in log(error); beyond its ends along
+/// error ∝ 1/√t from the nearest point, marked extrapolated. `None` if no
+/// point has positive time and error, or if the error is below every point
+/// and the curve stopped falling (its last point no lower than the one
+/// before): the curve never reaches it.
+///
+/// ```
+/// use pbgi::report::time_for;
+///
+/// let curve = [(1.0, 0.08), (4.0, 0.04)];
+/// let r = time_for(&curve, 0.04 * 2f64.sqrt()).unwrap(); // halfway in log-log
+/// assert!((r.seconds - 2.0).abs() < 1e-9 && !r.extrapolated);
+/// let r = time_for(&curve, 0.02).unwrap(); // 1/√t beyond the end
+/// assert!((r.seconds - 16.0).abs() < 1e-9 && r.extrapolated);
+/// assert!(time_for(&[(1.0, 0.03), (2.0, 0.03)], 0.02).is_none());
+/// ```
+pub fn time_for(curve: &[(f64, f64)], error: f64) -> Option<Reach> {
+    let ok = |x: f64| x > 0.0 && x.is_finite();
+    let pts: Vec<(f64, f64)> = curve.iter().copied().filter(|&(t, e)| ok(t) && ok(e)).collect();
+    if !ok(error) {
+        return None;
+    }
+    let &(t0, e0) = pts.first()?;
+    if e0 <= error {
+        return Some(Reach {
+            seconds: t0 * (e0 / error).powi(2),
+            extrapolated: e0 < error,
+        });
+    }
+    // The first point at or below the error; the one before is above it.
+    if let Some(k) = pts.iter().position(|&(_, e)| e <= error) {
+        let ((ta, ea), (tb, eb)) = (pts[k - 1], pts[k]);
+        let f = (error / ea).ln() / (eb / ea).ln();
+        return Some(Reach {
+            seconds: (ta.ln() + f * (tb / ta).ln()).exp(),
+            extrapolated: false,
+        });
+    }
+    let &(tn, en) = pts.last()?;
+    let still_falling = pts.len() < 2 || en < pts[pts.len() - 2].1;
+    still_falling.then(|| Reach {
+        seconds: tn * (en / error).powi(2),
+        extrapolated: true,
+    })
+}
+
+/// One row of the equal-error table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EqualError {
+    /// The relative RMSE.
+    pub error: f64,
+    /// When the path tracer reaches it.
+    pub path_tracer: Option<Reach>,
+    /// The point-based curve that reaches it soonest, and when; one that
+    /// reaches it between measured points wins over any extrapolated one.
+    pub point_based: Option<(String, Reach)>,
+}
+
+impl EqualError {
+    /// The path tracer's time over the point-based one (above 1: the
+    /// point-based renderer is faster), extrapolated if either is.
+    pub fn ratio(&self) -> Option<Reach> {
+        let (pt, (_, pb)) = (self.path_tracer?, self.point_based.as_ref()?);
+        Some(Reach {
+            seconds: pt.seconds / pb.seconds,
+            extrapolated: pt.extrapolated || pb.extrapolated,
+        })
+    }
+}
+
+/// The equal-error table of `points` at each of `errors`.
+pub fn equal_error(points: &[ErrorPoint], errors: &[f64]) -> Vec<EqualError> {
+    let all = series(points);
+    errors
+        .iter()
+        .map(|&error| {
+            let mut path_tracer = None;
+            let mut point_based: Option<(String, Reach)> = None;
+            for s in &all {
+                let Some(r) = time_for(&s.time_error(), error) else {
+                    continue;
+                };
+                match s.method {
+                    Method::PathTracer => path_tracer = Some(r),
+                    Method::PointBased => {
+                        // Measured beats extrapolated: 1/√t flatters a curve
+                        // beyond its ends (fixed costs below, a bias floor above).
+                        let key = |r: &Reach| (r.extrapolated, r.seconds);
+                        if point_based.as_ref().is_none_or(|b| key(&r) < key(&b.1)) {
+                            point_based = Some((s.label.clone(), r));
+                        }
+                    }
+                }
+            }
+            EqualError {
+                error,
+                path_tracer,
+                point_based,
+            }
+        })
+        .collect()
+}

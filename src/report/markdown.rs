@@ -1,0 +1,106 @@
+//! The report as Markdown: the equal-error tables first (what a reader came
+//! for), then every point.
+
+use std::fmt::Write as _;
+
+use super::equal_error::{Reach, equal_error, series, time_for};
+use super::sweep::{ErrorPoint, Method};
+
+/// Seconds to three significant digits.
+fn seconds(x: f64) -> String {
+    match x {
+        x if x >= 100.0 => format!("{x:.0} s"),
+        x if x >= 10.0 => format!("{x:.1} s"),
+        x if x >= 1.0 => format!("{x:.2} s"),
+        x => format!("{x:.3} s"),
+    }
+}
+
+/// `~` marks a value that rests on an extrapolation.
+fn approx(r: &Reach, text: String) -> String {
+    if r.extrapolated { format!("~{text}") } else { text }
+}
+
+fn percent(e: f64) -> String {
+    let v = e * 100.0;
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{v:.0} %")
+    } else {
+        format!("{v:.1} %")
+    }
+}
+
+/// The equal-error table (path tracer, best point-based curve, their ratio)
+/// at each of `errors`, then every curve's time at each.
+pub fn equal_error_markdown(points: &[ErrorPoint], errors: &[f64]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| rel. RMSE | path tracer | point-based (best curve) | path tracer / point-based |\n\
+         | --- | --- | --- | --- |"
+    );
+    let none = || "—".to_string();
+    for row in equal_error(points, errors) {
+        let pt = row
+            .path_tracer
+            .map_or_else(none, |r| approx(&r, seconds(r.seconds)));
+        let pb = row.point_based.as_ref().map_or_else(none, |(label, r)| {
+            approx(r, format!("{} ({label})", seconds(r.seconds)))
+        });
+        let ratio = row
+            .ratio()
+            .map_or_else(none, |r| approx(&r, format!("{:.2}×", r.seconds)));
+        let _ = writeln!(s, "| {} | {pt} | {pb} | {ratio} |", percent(row.error));
+    }
+    let all = series(points);
+    let _ = write!(s, "\nTime along each curve:\n\n| rel. RMSE |");
+    for c in &all {
+        let _ = write!(s, " {} |", c.label);
+    }
+    let _ = writeln!(s, "\n| --- |{}", " --- |".repeat(all.len()));
+    for &e in errors {
+        let _ = write!(s, "| {} |", percent(e));
+        for c in &all {
+            let cell = time_for(&c.time_error(), e).map_or_else(none, |r| approx(&r, seconds(r.seconds)));
+            let _ = write!(s, " {cell} |");
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(
+        s,
+        "\n~ extrapolated beyond the measured points along error ∝ 1/√t; \
+         — not reached (the curve's error stopped falling above it)."
+    );
+    s
+}
+
+/// The whole report: a header (`context`: the reference, the settings, the
+/// threads, one paragraph), the equal-error tables at `errors`, and every
+/// point.
+pub fn to_markdown(scene: &str, points: &[ErrorPoint], errors: &[f64], context: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "## {scene}: error against run time\n\n{context}\n");
+    let _ = writeln!(s, "### Time to reach an error\n");
+    s.push_str(&equal_error_markdown(points, errors));
+    let _ = writeln!(
+        s,
+        "\n### Points\n\nTimes in seconds: pre., trav. and others summed over threads, total wall clock.\n\n\
+         | curve | spp | pre. | trav. | others | total | rel. RMSE |\n\
+         | --- | --- | --- | --- | --- | --- | --- |"
+    );
+    for p in points {
+        let _ = match p.method {
+            Method::PointBased => writeln!(
+                s,
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
+                p.label, p.spp, p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
+            ),
+            Method::PathTracer => writeln!(
+                s,
+                "| {} | {} | | | | {:.3} | {:.4} |",
+                p.label, p.spp, p.total_s, p.rel_rmse
+            ),
+        };
+    }
+    s
+}

@@ -1,0 +1,338 @@
+//! The report: time at equal error read off synthetic curves, the CSV read
+//! back, a small sweep end to end (library and command line).
+
+use std::path::{Path, PathBuf};
+
+use pbgi::render::{ReferenceOptions, RenderOptions, render_reference};
+use pbgi::report::{
+    ErrorPoint, Method, PATH_TRACER, Reach, ReportError, SweepOptions, default_curves, equal_error,
+    error_sweep, from_csv, time_for, to_csv,
+};
+use pbgi::scene::builtin::cornell_box;
+mod common;
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * b.abs().max(1.0)
+}
+
+/// Between the two points that bracket the error, log(time) is linear in
+/// log(error); the first crossing counts, even where the times are not in
+/// order (a curve's cost is its spp, and a cheap image may run slower).
+#[test]
+fn time_for_interpolates_between_the_bracketing_points() {
+    // Error ∝ t^-1/2 exactly: every interpolation is exact.
+    let curve = [(1.0, 0.08), (4.0, 0.04), (16.0, 0.02)];
+    let r = time_for(&curve, 0.04 * 2f64.sqrt()).unwrap();
+    assert!(close(r.seconds, 2.0) && !r.extrapolated, "{r:?}");
+    let r = time_for(&curve, 0.02 * 2f64.sqrt()).unwrap();
+    assert!(close(r.seconds, 8.0) && !r.extrapolated, "{r:?}");
+    // Exactly on a point.
+    let r = time_for(&curve, 0.04).unwrap();
+    assert!(close(r.seconds, 4.0) && !r.extrapolated, "{r:?}");
+    // Error ∝ t^-1 between (2, 0.1) and (4, 0.05): 0.075 is at 2·(4/3) s.
+    let r = time_for(&[(2.0, 0.1), (4.0, 0.05)], 0.075).unwrap();
+    assert!(close(r.seconds, 8.0 / 3.0), "{r:?}");
+    // Times out of order: the error still falls along the curve, 6 s → 5 s.
+    let r = time_for(&[(6.0, 0.08), (5.0, 0.04), (7.0, 0.02)], 0.04 * 2f64.sqrt()).unwrap();
+    assert!(
+        close(r.seconds, (6.0f64 * 5.0).sqrt()) && !r.extrapolated,
+        "{r:?}"
+    );
+    // A bump: the first crossing of 3 % is the last segment, not the first.
+    let r = time_for(&[(1.0, 0.05), (2.0, 0.04), (4.0, 0.045), (8.0, 0.02)], 0.03).unwrap();
+    assert!(r.seconds > 4.0 && r.seconds < 8.0, "{r:?}");
+}
+
+/// Beyond the ends, error ∝ 1/√t from the nearest point, marked.
+#[test]
+fn time_for_extrapolates_beyond_the_ends_and_says_so() {
+    let curve = [(1.0, 0.08), (4.0, 0.04)];
+    assert_eq!(
+        time_for(&curve, 0.02),
+        Some(Reach {
+            seconds: 16.0,
+            extrapolated: true
+        })
+    );
+    assert_eq!(
+        time_for(&curve, 0.16),
+        Some(Reach {
+            seconds: 0.25,
+            extrapolated: true
+        })
+    );
+    // One point: both ways.
+    let r = time_for(&[(2.0, 0.05)], 0.025).unwrap();
+    assert!(close(r.seconds, 8.0) && r.extrapolated);
+}
+
+/// A curve whose error stopped falling never reaches an error below it;
+/// no usable point, no time.
+#[test]
+fn a_curve_that_stops_falling_never_reaches_a_lower_error() {
+    assert_eq!(time_for(&[(1.0, 0.05), (2.0, 0.03), (4.0, 0.031)], 0.02), None);
+    assert_eq!(time_for(&[(1.0, 0.05), (2.0, 0.03), (4.0, 0.03)], 0.02), None);
+    // It still reaches what it passed.
+    assert!(time_for(&[(1.0, 0.05), (2.0, 0.03), (4.0, 0.031)], 0.04).is_some());
+    assert_eq!(time_for(&[], 0.02), None);
+    assert_eq!(time_for(&[(0.0, 0.05), (1.0, f64::NAN)], 0.02), None);
+    assert_eq!(time_for(&[(1.0, 0.05)], 0.0), None);
+}
+
+fn point(method: Method, label: &str, spp: u32, total_s: f64, rel_rmse: f64) -> ErrorPoint {
+    ErrorPoint {
+        method,
+        label: label.into(),
+        spp,
+        pre_s: 0.125,
+        trav_s: 0.5,
+        others_s: 1.5,
+        total_s,
+        rel_rmse,
+    }
+}
+
+/// The table takes, per error, the point-based curve that gets there
+/// first, a measured time before an extrapolated one, and divides the path
+/// tracer's time by it.
+#[test]
+fn the_equal_error_table_takes_the_best_curve() {
+    use Method::{PathTracer, PointBased};
+    let points = [
+        // Fast but stuck at 4 %.
+        point(PointBased, "sparse", 1, 2.0, 0.06),
+        point(PointBased, "sparse", 4, 2.5, 0.04),
+        point(PointBased, "sparse", 16, 3.0, 0.04),
+        // Slower, keeps falling.
+        point(PointBased, "dense", 1, 4.0, 0.05),
+        point(PointBased, "dense", 4, 16.0, 0.025),
+        // Under 5 % at its first (and only) point, extrapolated to 5 % at
+        // 1.92 s: the sparse curve's measured 2.21 s wins all the same.
+        point(PointBased, "one point", 4, 3.0, 0.04),
+        point(PathTracer, PATH_TRACER, 16, 1.0, 0.1),
+        point(PathTracer, PATH_TRACER, 64, 4.0, 0.05),
+        point(PathTracer, PATH_TRACER, 256, 16.0, 0.025),
+    ];
+    let rows = equal_error(&points, &[0.05, 0.03, 0.02]);
+    let (label, pb) = rows[0].point_based.clone().unwrap();
+    assert_eq!(label, "sparse");
+    // 5 % halfway (in log error) from 6 % to 4 % is at 2·(2.5/2)^f s.
+    let f = (0.05f64 / 0.06).ln() / (0.04f64 / 0.06).ln();
+    assert!(
+        close(pb.seconds, 2.0 * 1.25f64.powf(f)) && !pb.extrapolated,
+        "{pb:?}"
+    );
+    assert!(close(rows[0].path_tracer.unwrap().seconds, 4.0));
+    let ratio = rows[0].ratio().unwrap();
+    assert!(close(ratio.seconds, 4.0 / pb.seconds) && !ratio.extrapolated);
+    // 3 %: sparse stopped at 4 %; the one point would get there sooner
+    // (5.3 s), but only extrapolated: the dense curve's measured 11 s wins.
+    let (label, pb) = rows[1].point_based.clone().unwrap();
+    assert_eq!(label, "dense");
+    assert!(!pb.extrapolated);
+    // 2 %: beyond every curve's end, so the soonest extrapolation: the one
+    // point's 3·2² s against the dense curve's 16·1.25² s; the ratio is
+    // extrapolated too.
+    let (label, pb) = rows[2].point_based.clone().unwrap();
+    assert_eq!(label, "one point");
+    assert!(close(pb.seconds, 12.0) && pb.extrapolated, "{pb:?}");
+    assert!(rows[2].ratio().unwrap().extrapolated);
+    // No path tracer: no ratio.
+    let rows = equal_error(&points[..6], &[0.05]);
+    assert!(rows[0].path_tracer.is_none() && rows[0].ratio().is_none());
+}
+
+/// What `to_csv` writes, `from_csv` reads back to the same points (times
+/// in micro-seconds), a label with a comma and a quote included; a bad line
+/// is an error naming its number.
+#[test]
+fn the_csv_reads_back_what_it_wrote() {
+    let points = vec![
+        point(Method::PointBased, "defaults", 1, 6.25, 0.0763),
+        point(Method::PointBased, "Ω 0.02, \"dense\" gathers", 4, 14.5, 0.0284),
+        point(Method::PathTracer, PATH_TRACER, 1024, 50.125, 0.0231),
+    ];
+    let text = to_csv("box, small", &points);
+    let (scene, back) = from_csv(&text).unwrap();
+    assert_eq!(scene, "box, small");
+    assert_eq!(back, points);
+    assert_eq!(to_csv(&scene, &back), text);
+
+    let line2 = |text: &str, from: &str, to: &str| {
+        let broken = text.replacen(from, to, 1);
+        match from_csv(&broken) {
+            Err(ReportError::Csv { line, what, .. }) => (line, what),
+            other => panic!("{from} → {to}: {other:?}"),
+        }
+    };
+    assert_eq!(line2(&text, ",pbgi,", ",warp,"), (2, "unknown method"));
+    assert_eq!(line2(&text, ",1,", ",one,"), (2, "bad spp"));
+    assert_eq!(line2(&text, "6.250000", "inf"), (2, "not a finite number"));
+    assert_eq!(line2(&text, "gathers\",", "gathers,"), (3, "a quote left open"));
+    assert_eq!(line2(&text, ",defaults,", ",a,b,"), (2, "expected 9 fields"));
+    assert_eq!(
+        line2(&text, "scene,", "place,"),
+        (1, "not the header of an error sweep's CSV")
+    );
+}
+
+/// The committed Cornell-box report (`pbgi report cornell-box`, README)
+/// reads back and writes the same CSV.
+#[test]
+fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cornell-box/error.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let (scene, points) = from_csv(&text).unwrap();
+    assert_eq!(scene, "cornell-box");
+    assert!(points.iter().any(|p| p.method == Method::PathTracer));
+    assert!(points.iter().filter(|p| p.method == Method::PointBased).count() > 5);
+    assert_eq!(to_csv(&scene, &points), text);
+}
+
+/// A whole sweep on a 16 × 16 Cornell box: every image measured, grouped
+/// by curve, cheapest first; the path tracer's error falls with its spp; a
+/// reference of the wrong size, or a point of 0 spp, stops it before any
+/// image.
+#[test]
+fn a_small_sweep_measures_every_curve() {
+    let mut scene = cornell_box();
+    scene.camera.width = 16;
+    scene.camera.height = 16;
+    let o = ReferenceOptions {
+        spp: 1024,
+        ..Default::default()
+    };
+    let reference = render_reference(&scene, &o, &|_, _| {}).unwrap().image;
+    let base = RenderOptions::default();
+    let opts = SweepOptions {
+        curves: default_curves(&base, &[1, 4]),
+        path_tracer_spp: vec![4, 64],
+        bounces: base.bounces,
+    };
+    let labels: Vec<&str> = opts.curves.iter().map(|c| c.label.as_str()).collect();
+    assert_eq!(labels, ["defaults", "Ω 0.02", "dense gathers"]);
+    let last = std::sync::Mutex::new(None);
+    let points = error_sweep(&scene, &reference, &opts, &|p| {
+        *last.lock().unwrap() = Some(p.clone())
+    })
+    .unwrap();
+    let last = last.into_inner().unwrap().unwrap();
+    assert_eq!((last.done, last.images, last.remaining_s), (7, 7, Some(0.0)));
+    let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
+    assert_eq!(
+        order,
+        [
+            ("defaults", 1),
+            ("defaults", 4),
+            ("Ω 0.02", 4),
+            ("dense gathers", 1),
+            ("dense gathers", 4),
+            (PATH_TRACER, 4),
+            (PATH_TRACER, 64)
+        ]
+    );
+    for p in &points {
+        assert!(
+            p.rel_rmse.is_finite() && p.rel_rmse > 0.0 && p.total_s > 0.0,
+            "{p:?}"
+        );
+    }
+    assert!(
+        points[6].rel_rmse < 0.6 * points[5].rel_rmse,
+        "{:?}",
+        &points[5..]
+    );
+
+    let mut small = reference.clone();
+    small.width = 8;
+    small.pixels.truncate(8 * 16);
+    let err = error_sweep(&scene, &small, &opts, &|_| {}).unwrap_err();
+    assert!(matches!(err, ReportError::ReferenceSize { .. }));
+    let msg = err.to_string();
+    assert!(msg.contains("8×16") && msg.contains("16×16"), "{msg}");
+    let zero = SweepOptions {
+        path_tracer_spp: vec![4, 0],
+        ..opts
+    };
+    let err = error_sweep(&scene, &reference, &zero, &|_| {
+        panic!("no image before the check")
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains(PATH_TRACER), "{err}");
+}
+
+/// The measured Cornell box at 24 × 16 pixels (its meshes from tests/data).
+#[cfg(feature = "cli")]
+fn small_scene(dir: &Path) -> PathBuf {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell-box");
+    let xml = std::fs::read_to_string(data.join("cbox.xml")).unwrap();
+    let meshes = format!("{}/", data.join("meshes").display());
+    let xml = xml
+        .replace("name=\"resx\" value=\"256\"", "name=\"resx\" value=\"24\"")
+        .replace("name=\"resy\" value=\"256\"", "name=\"resy\" value=\"16\"")
+        .replace("value=\"meshes/", &format!("value=\"{meshes}"));
+    assert!(xml.contains("value=\"24\"") && xml.contains("value=\"16\""));
+    let path = dir.join("small.xml");
+    std::fs::write(&path, xml).unwrap();
+    path
+}
+
+/// `pbgi report` end to end on a small scene: it path traces the missing
+/// reference, sweeps, prints the equal-error table and writes the four
+/// files; `--replot` redraws from the CSV; a reference of another size is
+/// refused with both sizes named.
+#[cfg(feature = "cli")]
+#[test]
+fn the_cli_report_runs_end_to_end() {
+    let dir = std::env::temp_dir().join(format!("pbgi-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = small_scene(&dir);
+    let out_dir = dir.join("out");
+    let run = |args: &[&str]| {
+        let o = common::pbgi_command().arg("report").args(args).output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        (o.status.success(), text)
+    };
+    let (scene_s, out_s) = (scene.to_str().unwrap(), out_dir.to_str().unwrap());
+    let (ok, text) = run(&[
+        scene_s,
+        "--out",
+        out_s,
+        "--reference-spp",
+        "256",
+        "--spp",
+        "1,4",
+        "--path-tracer-spp",
+        "4,16",
+    ]);
+    assert!(ok, "{text}");
+    assert!(text.contains("path traced at 256 spp"), "{text}");
+    assert!(
+        text.contains("| 5 % |") && text.contains("path tracer / point-based"),
+        "{text}"
+    );
+    for f in ["reference.exr", "error.csv", "error.md", "error.png", "error.svg"] {
+        assert!(out_dir.join(f).is_file(), "{f} missing:\n{text}");
+    }
+    let md = std::fs::read_to_string(out_dir.join("error.md")).unwrap();
+    assert!(
+        md.contains("### Time to reach an error") && md.contains("| dense gathers | 4 |"),
+        "{md}"
+    );
+    std::fs::remove_file(out_dir.join("error.png")).unwrap();
+    let (ok, text) = run(&["--replot", "--out", out_s]);
+    assert!(ok && text.contains("| 2 % |"), "{text}");
+    assert!(out_dir.join("error.png").is_file());
+
+    let reference = out_dir.join("reference.exr");
+    let (ok, text) = run(&[
+        "cornell-box",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--out",
+        out_s,
+    ]);
+    assert!(!ok);
+    assert!(text.contains("24×16") && text.contains("256×256"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
