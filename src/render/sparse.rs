@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use super::frame::{Frame, Timers};
 use super::options::Gathers;
 use super::output::RenderError;
-use super::shading::shading_point;
+use super::shading::{ShadingPoint, shading_point};
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::simd::LANES;
@@ -243,7 +243,7 @@ impl Frame<'_> {
             .collect();
         let mut s = s;
         loop {
-            self.gather_lattice(&mut lattice, &mut points, gather, timers)?;
+            self.gather_lattice(&mut lattice, &points, gather, timers)?;
             if s < 2 {
                 break;
             }
@@ -272,59 +272,63 @@ impl Frame<'_> {
         Ok(Some(lattice))
     }
 
-    /// Gathers at `points` (sorted here into Morton order), 16 to a packet,
-    /// over the threads, and stores what each found in `lattice`.
+    /// Casts the camera rays of `points` through their pixel centres, then
+    /// gathers at those that hit a receiver, 16 to a packet over the
+    /// threads, and stores what each found in `lattice`. A packet holds
+    /// receivers facing one way, neighbours in Morton order: along an edge
+    /// the points of its two faces would otherwise share packets and their
+    /// cuts little (lane utilization 61 % → 64.5 % on the Cornell box).
     fn gather_lattice(
         &self,
         lattice: &mut Lattice,
-        points: &mut [(u32, u32)],
+        points: &[(u32, u32)],
         gather: &Gather,
         timers: &Timers,
     ) -> Result<(), RenderError> {
-        points.sort_unstable_by_key(|&(x, y)| morton(x, y));
-        let packets = points
+        let cam = &self.scene.camera;
+        let mut hits: Vec<((u32, u32), ShadingPoint)> = points
+            .par_iter()
+            .filter_map(|&(x, y)| {
+                let dir = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+                let sp = self
+                    .tracer
+                    .closest(cam.origin, dir, f32::INFINITY)
+                    .and_then(|hit| shading_point(self.scene, &self.tracer, cam.origin, dir, &hit))?;
+                (!self.gathers_per_sample(sp.material)).then_some(((x, y), sp))
+            })
+            .collect();
+        for &(x, y) in points {
+            *lattice.slot_mut(x, y) = Slot::Hole;
+        }
+        hits.sort_unstable_by_key(|((x, y), sp)| (facing(sp.normal), morton(*x, *y)));
+        let packets = hits
             .par_chunks(LANES)
             .map_init(
                 || gather.gatherer(),
                 |gatherer, chunk| self.gather_points(chunk, gatherer, timers),
             )
             .collect::<Result<Vec<_>, _>>()?;
-        for (chunk, (slots, stats)) in points.chunks(LANES).zip(packets) {
+        for (chunk, (es, stats)) in hits.chunks(LANES).zip(packets) {
             lattice.stats.merge(&stats);
-            for (&(x, y), slot) in chunk.iter().zip(slots) {
-                lattice.count += usize::from(matches!(slot, Slot::Gathered(_)));
-                *lattice.slot_mut(x, y) = slot;
+            lattice.count += chunk.len();
+            for (((x, y), sp), e) in chunk.iter().zip(es) {
+                *lattice.slot_mut(*x, *y) = Slot::Gathered(Record {
+                    position: sp.position,
+                    normal: sp.normal,
+                    e,
+                });
             }
         }
         Ok(())
     }
 
-    /// One packet of lattice points: their camera rays through the pixel
-    /// centres, then the gather at those that hit a receiver.
+    /// One packet of lattice receivers: their irradiance (or occlusion).
     fn gather_points(
         &self,
-        points: &[(u32, u32)],
+        hits: &[((u32, u32), ShadingPoint)],
         gatherer: &mut Gatherer,
         timers: &Timers,
-    ) -> Result<(Vec<Slot>, TraversalStats), RenderError> {
-        let cam = &self.scene.camera;
-        let mut slots = vec![Slot::Hole; points.len()];
-        let mut hits = Vec::with_capacity(points.len());
-        for (i, &(x, y)) in points.iter().enumerate() {
-            let dir = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-            let point = self
-                .tracer
-                .closest(cam.origin, dir, f32::INFINITY)
-                .and_then(|hit| shading_point(self.scene, &self.tracer, cam.origin, dir, &hit));
-            if let Some(sp) = point
-                && !self.gathers_per_sample(sp.material)
-            {
-                hits.push((i, sp));
-            }
-        }
-        if hits.is_empty() {
-            return Ok((slots, TraversalStats::default()));
-        }
+    ) -> Result<(Vec<Vec3>, TraversalStats), RenderError> {
         let receivers = hits
             .iter()
             .map(|(_, sp)| Receiver::new(sp.position, sp.normal))
@@ -335,21 +339,29 @@ impl Frame<'_> {
         timers.trav.add((t2 - t1).as_secs_f64());
         let e = gatherer.shade(self.convolution());
         timers.others.add(t2.elapsed().as_secs_f64());
-        for ((i, sp), e) in hits.into_iter().zip(e) {
+        for (((x, y), _), e) in hits.iter().zip(&e) {
             if !e.is_finite() {
-                let (x, y) = points[i];
                 return Err(RenderError::NonFinite {
                     stage: "gather at the lattice",
                     place: format!("lattice point at the centre of pixel ({x}, {y})"),
                     value: e.to_array(),
                 });
             }
-            slots[i] = Slot::Gathered(Record {
-                position: sp.position,
-                normal: sp.normal,
-                e,
-            });
         }
-        Ok((slots, stats))
+        Ok((e, stats))
     }
+}
+
+/// Which of the six axis directions `n` is closest to: receivers facing
+/// one way share most of their cuts.
+fn facing(n: Vec3) -> u8 {
+    let a = n.abs();
+    let (axis, v) = if a.x >= a.y && a.x >= a.z {
+        (0, n.x)
+    } else if a.y >= a.z {
+        (1, n.y)
+    } else {
+        (2, n.z)
+    };
+    axis * 2 + u8::from(v < 0.0)
 }
