@@ -126,7 +126,8 @@ impl Lattice {
         // differs by more than `threshold` of their mean: a gradient.
         (0..4).any(|i| {
             (i + 1..4).any(|j| {
-                !(r[i].covers(r[j].position, r[j].normal, eye) && r[j].covers(r[i].position, r[i].normal, eye))
+                !(r[i].covers(r[j].position, r[j].normal, eye)
+                    && r[j].covers(r[i].position, r[i].normal, eye))
                     || (l[i] - l[j]).abs() > self.threshold * (l[i] + l[j])
             })
         })
@@ -364,4 +365,102 @@ fn facing(n: Vec3) -> u8 {
         (2, n.z)
     };
     axis * 2 + u8::from(v < 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-cell lattice of side `s` whose corners are `records` (in the
+    /// order (0, 0), (s, 0), (0, s), (s, s)), on a film of `s + 1` pixels.
+    fn cell(s: u32, records: [Option<Record>; 4]) -> Lattice {
+        let width = s + 1;
+        let mut slots = vec![Slot::Unasked; (width * width) as usize];
+        for ((x, y), r) in [(0, 0), (s, 0), (0, s), (s, s)].into_iter().zip(records) {
+            slots[(y * width + x) as usize] = r.map_or(Slot::Hole, Slot::Gathered);
+        }
+        Lattice {
+            spacing: s,
+            threshold: 0.1,
+            film: (width, width),
+            x0: 0,
+            y0: 0,
+            width,
+            slots,
+            stats: TraversalStats::default(),
+            count: 0,
+        }
+    }
+
+    fn record(position: Vec3, normal: Vec3, e: f32) -> Option<Record> {
+        Some(Record {
+            position,
+            normal,
+            e: Vec3::splat(e),
+        })
+    }
+
+    #[test]
+    fn a_sample_takes_only_the_corners_on_its_own_surface() {
+        // A floor (y = 0, up) on the cell's left column, a wall (x = 1,
+        // facing −x) on its right, ten times brighter: an edge.
+        let eye = Vec3::new(0.5, 1.0, 5.0);
+        let (up, left) = (Vec3::Y, Vec3::NEG_X);
+        let lattice = cell(
+            4,
+            [
+                record(Vec3::new(0.0, 0.0, 0.0), up, 1.0),
+                record(Vec3::new(1.0, 0.5, 0.0), left, 10.0),
+                record(Vec3::new(0.0, 0.0, 1.0), up, 1.0),
+                record(Vec3::new(1.0, 0.5, 1.0), left, 10.0),
+            ],
+        );
+        // A floor sample near the wall's corners gets the floor's light
+        // alone; a wall sample, the wall's.
+        let floor = lattice.irradiance((3.5, 2.5), Vec3::new(0.9, 0.0, 0.5), up, eye);
+        assert_eq!(floor, Some(Vec3::splat(1.0)));
+        let wall = lattice.irradiance((1.5, 2.5), Vec3::new(1.0, 0.2, 0.5), left, eye);
+        assert_eq!(wall, Some(Vec3::splat(10.0)));
+        // A sample on neither (a thin object between lattice points)
+        // gathers itself.
+        let other = lattice.irradiance((2.5, 2.5), Vec3::new(0.5, 0.3, 0.5), Vec3::Z, eye);
+        assert_eq!(other, None);
+    }
+
+    #[test]
+    fn a_sample_on_one_surface_blends_its_corners_bilinearly() {
+        let eye = Vec3::new(0.5, 1.0, 5.0);
+        let lattice = cell(
+            2,
+            [
+                record(Vec3::new(0.0, 0.0, 0.0), Vec3::Y, 1.0),
+                record(Vec3::new(1.0, 0.0, 0.0), Vec3::Y, 2.0),
+                record(Vec3::new(0.0, 0.0, 1.0), Vec3::Y, 3.0),
+                record(Vec3::new(1.0, 0.0, 1.0), Vec3::Y, 4.0),
+            ],
+        );
+        // Film (1.5, 1.0) is lattice (1, 0.5): half-way across, a quarter
+        // of the way down.
+        let e = lattice
+            .irradiance((1.5, 1.0), Vec3::new(0.5, 0.0, 0.25), Vec3::Y, eye)
+            .unwrap();
+        assert!((e.x - 2.0).abs() < 1e-6, "{e}");
+        // Its light changes by more than 10 % between corners: it is halved.
+        assert!(lattice.needs_refining(0, 0, 2, eye));
+        // Within 10 %, on one plane: it is not; across an edge it is.
+        let flat = |e: [f32; 3], n: Vec3| {
+            cell(
+                2,
+                [
+                    record(Vec3::new(0.0, 0.0, 0.0), Vec3::Y, 1.0),
+                    record(Vec3::new(1.0, 0.0, 0.0), Vec3::Y, e[0]),
+                    record(Vec3::new(0.0, 0.0, 1.0), Vec3::Y, e[1]),
+                    record(Vec3::new(1.0, 0.0, 1.0), n, e[2]),
+                ],
+            )
+        };
+        assert!(!flat([1.1, 1.0, 1.15], Vec3::Y).needs_refining(0, 0, 2, eye));
+        assert!(flat([1.1, 1.0, 1.3], Vec3::Y).needs_refining(0, 0, 2, eye));
+        assert!(flat([1.0, 1.0, 1.0], Vec3::X).needs_refining(0, 0, 2, eye));
+    }
 }

@@ -75,7 +75,10 @@ impl Frame<'_> {
                 for pp in points {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
-                    match lattice.filter(|_| !per_sample).and_then(|l| l.irradiance(pp.film, sp.position, sp.normal, eye)) {
+                    match lattice
+                        .filter(|_| !per_sample)
+                        .and_then(|l| l.irradiance(pp.film, sp.position, sp.normal, eye))
+                    {
                         Some(e) => served.push((s, pp, e)),
                         None => own.push((s, pp)),
                     }

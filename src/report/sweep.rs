@@ -115,7 +115,9 @@ impl Variant {
 
 fn gathers_text(g: Gathers) -> String {
     match g {
-        Gathers::Sparse { spacing, threshold } => format!("sparse gathers {spacing} px, threshold {threshold}"),
+        Gathers::Sparse { spacing, threshold } => {
+            format!("sparse gathers {spacing} px, threshold {threshold}")
+        }
         Gathers::All => "dense gathers".into(),
     }
 }

@@ -181,7 +181,9 @@ pub fn parse_gathers(g: &str) -> Res<Gathers> {
         "sparse" => Ok(Gathers::default()),
         g => match (g.parse(), Gathers::default()) {
             (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
-            _ => Err(format!("--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels").into()),
+            _ => {
+                Err(format!("--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels").into())
+            }
         },
     }
 }

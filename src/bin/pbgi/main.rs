@@ -18,7 +18,8 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
 use pbgi::render::{
-    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render, render_reference,
+    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render,
+    render_reference,
 };
 use pbgi::report::{BenchOptions, BenchRow, bench};
 use pbgi::scene::resolve;
