@@ -31,8 +31,9 @@ render first); the warm-up, JIT included, is printed as well. With --repeat N
 each spp is rendered N times (other seeds) and the fastest time is kept, the
 error being the first render's. Dr.Jit keeps compiled kernels in
 ~/.drjit: run with HOME=$(mktemp -d) to time the warm-up with a cold cache.
-Another busy process on the machine inflates every time: the load average
-is printed before and after.
+Another busy process on the machine inflates the wall times: the CPU
+seconds of the render's threads are printed beside them (about twice the
+wall time on an idle 2-core machine), and the load average before and after.
 """
 
 import argparse
@@ -60,12 +61,12 @@ def load_scene(xml):
 
 
 def render(scene, spp, seed):
-    """One render; (image, wall seconds)."""
-    t = time.perf_counter()
+    """One render; (image, wall seconds, CPU seconds of all threads)."""
+    t, c = time.perf_counter(), time.process_time()
     img = mi.render(scene, spp=spp, seed=seed)
     dr.eval(img)
     dr.sync_thread()
-    return img, time.perf_counter() - t
+    return img, time.perf_counter() - t, time.process_time() - c
 
 
 def compare(pbgi, image, reference):
@@ -93,27 +94,28 @@ def main():
     spps = [int(s) for s in a.spp.split(",")]
 
     scene = load_scene(a.scene)
-    _, first = render(scene, spps[0], seed=0)  # JIT-compiles the kernels
-    _, warm = render(scene, spps[0], seed=1)
+    _, first, _ = render(scene, spps[0], seed=0)  # JIT-compiles the kernels
+    _, warm, _ = render(scene, spps[0], seed=1)
     print(f"Mitsuba {mi.__version__}, drjit {dr.__version__}, llvm_ad_rgb, "
           f"{dr.thread_count()} threads; warm-up at {spps[0]} spp: first render "
           f"{first:.2f} s (JIT and kernel cache included), second {warm:.2f} s; "
           f"load average {os.getloadavg()[0]:.2f}\n")
 
     rows = []
-    print("| spp | seconds | rel. RMSE | bias |")
-    print("| ---: | ---: | ---: | ---: |")
+    print("| spp | seconds | CPU seconds | rel. RMSE | bias |")
+    print("| ---: | ---: | ---: | ---: | ---: |")
     for i, spp in enumerate(spps):
         seconds = []
         for r in range(a.repeat):
-            img, t = render(scene, spp, seed=1000 * (i + 1) + r)
-            seconds.append(t)
+            img, t, cpu = render(scene, spp, seed=1000 * (i + 1) + r)
+            seconds.append((t, cpu))
             if r == 0:
                 path = os.path.join(a.out, f"mitsuba-{spp}spp.exr")
                 mi.Bitmap(img).write(path)
         rmse, bias = compare(a.pbgi, path, a.reference)
-        rows.append((spp, min(seconds), rmse))
-        print(f"| {spp} | {min(seconds):.3f} | {rmse:.4f} | {bias:+.4f} |", flush=True)
+        t, cpu = min(seconds)
+        rows.append((spp, t, rmse))
+        print(f"| {spp} | {t:.3f} | {cpu:.3f} | {rmse:.4f} | {bias:+.4f} |", flush=True)
 
     print(f"\nload average {os.getloadavg()[0]:.2f}")
     # error = c / sqrt(t): least squares on log(error) = log(c) - log(t) / 2.
