@@ -107,18 +107,14 @@ impl Lattice {
 
     /// Whether the cell at `(x, y)` of side `s` must be halved.
     fn needs_refining(&self, x: u32, y: u32, s: u32, eye: Vec3) -> bool {
-        let corners = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|(x, y)| self.slot(x, y));
-        let mut r = [Record {
-            position: Vec3::ZERO,
-            normal: Vec3::ZERO,
-            e: Vec3::ZERO,
-        }; 4];
-        for (r, c) in r.iter_mut().zip(corners) {
-            match c {
-                Slot::Gathered(c) => *r = c,
-                _ => return true,
-            }
-        }
+        let corners = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|(x, y)| match self.slot(x, y) {
+            Slot::Gathered(r) => Some(r),
+            _ => None,
+        });
+        let [Some(a), Some(b), Some(c), Some(d)] = corners else {
+            return true;
+        };
+        let r = [a, b, c, d];
         let l = r.map(|r| r.e.x + r.e.y + r.e.z);
         // Corners on two surfaces: an edge, where the light changes fastest
         // (a sample would extrapolate from one side: 1.6 % off the dense
@@ -239,6 +235,10 @@ impl Frame<'_> {
         let mut points: Vec<(u32, u32)> = (cy0..=cy1 + 1)
             .flat_map(|cy| (cx0..=cx1 + 1).map(move |cx| (cx * s, cy * s)))
             .collect();
+        // Asked: a hole until its gather says otherwise.
+        for &(x, y) in &points {
+            *lattice.slot_mut(x, y) = Slot::Hole;
+        }
         let mut cells: Vec<(u32, u32)> = (cy0..=cy1)
             .flat_map(|cy| (cx0..=cx1).map(move |cx| (cx * s, cy * s)))
             .collect();
@@ -261,7 +261,6 @@ impl Frame<'_> {
                 for (dx, dy) in [(h, 0), (0, h), (h, h), (s, h), (h, s)] {
                     let slot = lattice.slot_mut(x + dx, y + dy);
                     if matches!(slot, Slot::Unasked) {
-                        // Asked: a hole until its gather says otherwise.
                         *slot = Slot::Hole;
                         points.push((x + dx, y + dy));
                     }
@@ -298,9 +297,6 @@ impl Frame<'_> {
                 (!self.gathers_per_sample(sp.material)).then_some(((x, y), sp))
             })
             .collect();
-        for &(x, y) in points {
-            *lattice.slot_mut(x, y) = Slot::Hole;
-        }
         hits.sort_unstable_by_key(|((x, y), sp)| (facing(sp.normal), morton(*x, *y)));
         let packets = hits
             .par_chunks(LANES)

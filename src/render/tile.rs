@@ -96,9 +96,7 @@ impl Frame<'_> {
             }
         }
         self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
-        let Gathered {
-            adds, stats, count, ..
-        } = acc;
+        let Gathered { adds, stats, count } = acc;
         let out = pixels
             .iter()
             .zip(adds.chunks(spp))
