@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -114,7 +114,9 @@ impl Tracer {
             mesh,
             triangle,
             uv,
-            geometric_normal: Vec3::from((tri.v1 - tri.v0).cross(tri.v2 - tri.v0).normalize_or_zero()),
+            geometric_normal: (Vec3::from(tri.v1) - Vec3::from(tri.v0))
+                .cross(Vec3::from(tri.v2) - Vec3::from(tri.v0))
+                .normalize_or_zero(),
         })
     }
 
@@ -129,23 +131,30 @@ impl Tracer {
 }
 
 /// Möller–Trumbore, two-sided: `(t, barycentrics)`, `t = ∞` on a miss.
+///
+/// In `Vec3`, not obvhs's `Vec3A`: glam's NEON `Vec3A::cross` fuses a
+/// multiply-subtract (`vfmsq_f32`) where SSE2 and scalar code round the
+/// product first, so hits (and every pixel after them) differed in the last
+/// bits between x86 and AArch64. `Vec3` is plain `*` and `-` on every target.
 #[inline]
 fn intersect(tri: &Triangle, ray: &Ray) -> (f32, Vec2) {
-    let e1: Vec3A = tri.v1 - tri.v0;
-    let e2: Vec3A = tri.v2 - tri.v0;
-    let p = ray.direction.cross(e2);
+    let v0 = Vec3::from(tri.v0);
+    let (dir, origin) = (Vec3::from(ray.direction), Vec3::from(ray.origin));
+    let e1 = Vec3::from(tri.v1) - v0;
+    let e2 = Vec3::from(tri.v2) - v0;
+    let p = dir.cross(e2);
     let det = e1.dot(p);
     if det.abs() < 1e-20 {
         return (f32::INFINITY, Vec2::ZERO);
     }
     let inv = 1.0 / det;
-    let s = ray.origin - tri.v0;
+    let s = origin - v0;
     let u = s.dot(p) * inv;
     if !(0.0..=1.0).contains(&u) {
         return (f32::INFINITY, Vec2::ZERO);
     }
     let q = s.cross(e1);
-    let v = ray.direction.dot(q) * inv;
+    let v = dir.dot(q) * inv;
     if v < 0.0 || u + v > 1.0 {
         return (f32::INFINITY, Vec2::ZERO);
     }
