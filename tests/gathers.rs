@@ -109,6 +109,26 @@ fn sparse_gathers_stay_within_one_percent_of_the_dense_image_on_the_built_in_sce
 }
 
 #[test]
+fn samples_of_a_pixel_on_one_surface_share_a_gather_and_stay_within_one_percent() {
+    // The nave's piers are faceted: lattice corners fall on other facets,
+    // so samples there gather themselves. At 16 camera samples a pixel's
+    // samples on one facet share one gather: at most 20 % of the dense
+    // render's gathers (16.1 % measured, 22.6 % gathering each), within 1 %
+    // of it (0.57 %, as without sharing).
+    let s = pbgi::scene::builtin::scene("nave").expect("built-in");
+    let s = if common::reduced() {
+        scene(s, 24, 18)
+    } else {
+        scene(s, 80, 60)
+    };
+    let opts = RenderOptions {
+        spp: 16,
+        ..Default::default()
+    };
+    within_one_percent("nave, 16 spp", s, opts, 0.2);
+}
+
+#[test]
 fn sparse_gathers_stay_within_one_percent_of_the_dense_image_on_the_fetched_scenes() {
     // Whole frames: the middle of Sponza alone, the far arcade where every
     // pixel holds several surfaces, needs 68 % of the dense gathers for 1 %

@@ -131,8 +131,8 @@ impl Lattice {
 
     /// The irradiance at a camera sample through film point `film` that hit
     /// `p` with normal `n`: the corners of the finest cell around it that lie
-    /// on its surface, blended bilinearly. `None` when no corner does.
-    pub fn irradiance(&self, film: (f32, f32), p: Vec3, n: Vec3, eye: Vec3) -> Option<Vec3> {
+    /// on its surface, blended bilinearly; or why the sample gathers itself.
+    pub fn irradiance(&self, film: (f32, f32), p: Vec3, n: Vec3, eye: Vec3) -> Served {
         // Lattice point (x, y) is the centre of pixel (x, y).
         let u = (film.0 - 0.5).clamp(0.0, (self.film.0 - 1) as f32);
         let v = (film.1 - 0.5).clamp(0.0, (self.film.1 - 1) as f32);
@@ -169,11 +169,83 @@ impl Lattice {
         // changes within a pixel (near an edge that lights or shades it,
         // 1.35 % off the dense Sponza at one sample per pixel, 0.90 % with
         // these), so the sample gathers itself.
-        if s == 1 && (count < 2 || hi - lo > 2.0 * self.threshold * (hi + lo)) {
-            return None;
+        if count == 0 {
+            Served::NoCorner
+        } else if s == 1 && (count < 2 || hi - lo > 2.0 * self.threshold * (hi + lo)) {
+            Served::Changing
+        } else {
+            Served::Light(sum / weight)
         }
-        (weight > 0.0).then(|| sum / weight)
     }
+}
+
+/// What the lattice gives a camera sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Served {
+    /// Its corners' irradiance, blended.
+    Light(Vec3),
+    /// No corner lies on its surface (a thin object, a facet between
+    /// lattice points): it gathers, and its pixel's other such samples on
+    /// the same surface may share that gather (`Frame::share_gathers`).
+    NoCorner,
+    /// Its one-pixel cell's light changes too much, or only one corner lies
+    /// on its surface: the light changes within the pixel, so it gathers
+    /// at its own place.
+    Changing,
+}
+
+/// A camera sample of a tile that the lattice does not serve.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Unserved {
+    /// Its pixel in the tile.
+    pub pixel: usize,
+    /// Its place among its pixel's camera samples, in the order they are
+    /// offered a gather.
+    pub rank: u32,
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// No lattice corner lies on its surface ([`Served::NoCorner`]), and
+    /// its material is neither glossy nor bumped.
+    pub may_share: bool,
+}
+
+/// Which samples take another's gather: for each, `None` (it gathers) or
+/// the index of a sample of its pixel, on its surface (the tests of
+/// [`Record::covers`], both ways), that gathers and ranks before it. Only
+/// samples that `may_share` share: a pixel's samples on a pier's facet, or
+/// on a thin object, would otherwise gather once per camera sample; where
+/// the light changes within the pixel each sample keeps its own gather.
+pub(crate) fn share(samples: &[Unserved], eye: Vec3) -> Vec<Option<usize>> {
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    order.sort_unstable_by_key(|&i| (samples[i].pixel, samples[i].rank, i));
+    let mut takes = vec![None; samples.len()];
+    // The current pixel's gathering samples that may share.
+    let mut leaders: Vec<usize> = Vec::new();
+    let mut pixel = usize::MAX;
+    for i in order {
+        let a = &samples[i];
+        if a.pixel != pixel {
+            pixel = a.pixel;
+            leaders.clear();
+        }
+        if !a.may_share {
+            continue;
+        }
+        let record = |u: &Unserved| Record {
+            position: u.position,
+            normal: u.normal,
+            e: Vec3::ZERO,
+        };
+        let here = record(a);
+        match leaders.iter().find(|&&j| {
+            let b = &samples[j];
+            record(b).covers(a.position, a.normal, eye) && here.covers(b.position, b.normal, eye)
+        }) {
+            Some(&j) => takes[i] = Some(j),
+            None => leaders.push(i),
+        }
+    }
+    takes
 }
 
 /// Interleaves the bits of `x` and `y`: nearby points, nearby codes.
@@ -414,13 +486,38 @@ mod tests {
         // A floor sample near the wall's corners gets the floor's light
         // alone; a wall sample, the wall's.
         let floor = lattice.irradiance((3.5, 2.5), Vec3::new(0.9, 0.0, 0.5), up, eye);
-        assert_eq!(floor, Some(Vec3::splat(1.0)));
+        assert_eq!(floor, Served::Light(Vec3::splat(1.0)));
         let wall = lattice.irradiance((1.5, 2.5), Vec3::new(1.0, 0.2, 0.5), left, eye);
-        assert_eq!(wall, Some(Vec3::splat(10.0)));
+        assert_eq!(wall, Served::Light(Vec3::splat(10.0)));
         // A sample on neither (a thin object between lattice points)
         // gathers itself.
         let other = lattice.irradiance((2.5, 2.5), Vec3::new(0.5, 0.3, 0.5), Vec3::Z, eye);
-        assert_eq!(other, None);
+        assert_eq!(other, Served::NoCorner);
+    }
+
+    #[test]
+    fn unserved_samples_share_a_gather_only_on_their_pixel_and_surface() {
+        let eye = Vec3::new(0.5, 1.0, 5.0);
+        let at = |pixel, rank, position: Vec3, normal, may_share| Unserved {
+            pixel,
+            rank,
+            position,
+            normal,
+            may_share,
+        };
+        let samples = [
+            // Pixel 0: two floor samples, a wall sample, a floor sample whose
+            // light changes within the pixel; the second floor sample ranks
+            // first, so it gathers.
+            at(0, 1, Vec3::new(0.1, 0.0, 0.0), Vec3::Y, true),
+            at(0, 0, Vec3::new(0.2, 0.0, 0.1), Vec3::Y, true),
+            at(0, 2, Vec3::new(1.0, 0.2, 0.1), Vec3::NEG_X, true),
+            at(0, 3, Vec3::new(0.3, 0.0, 0.0), Vec3::Y, false),
+            // Pixel 1: the floor again, but another pixel's.
+            at(1, 0, Vec3::new(0.15, 0.0, 0.0), Vec3::Y, true),
+            at(1, 1, Vec3::new(0.16, 0.0, 0.0), Vec3::Y, true),
+        ];
+        assert_eq!(share(&samples, eye), [Some(1), None, None, None, None, Some(4)]);
     }
 
     #[test]
@@ -437,9 +534,9 @@ mod tests {
         );
         // Film (1.5, 1.0) is lattice (1, 0.5): half-way across, a quarter
         // of the way down.
-        let e = lattice
-            .irradiance((1.5, 1.0), Vec3::new(0.5, 0.0, 0.25), Vec3::Y, eye)
-            .unwrap();
+        let Served::Light(e) = lattice.irradiance((1.5, 1.0), Vec3::new(0.5, 0.0, 0.25), Vec3::Y, eye) else {
+            panic!("not served");
+        };
         assert!((e.x - 2.0).abs() < 1e-6, "{e}");
         // Its light changes by more than 10 % between corners: it is halved.
         assert!(lattice.needs_refining(0, 0, 2, eye));

@@ -12,9 +12,10 @@ use glam::Vec3;
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
-use super::sparse::Lattice;
+use super::sparse::{Lattice, Served, Unserved, share};
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
+use crate::rng::mix;
 use crate::simd::LANES;
 
 /// What a tile's gathers leave: each camera sample's light (`[k * spp +
@@ -75,12 +76,13 @@ impl Frame<'_> {
                 for pp in points {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
-                    match lattice
-                        .filter(|_| !per_sample)
-                        .and_then(|l| l.irradiance(pp.film, sp.position, sp.normal, eye))
-                    {
-                        Some(e) => served.push((s, pp, e)),
-                        None => own.push((s, pp)),
+                    match lattice.filter(|_| !per_sample) {
+                        Some(l) => match l.irradiance(pp.film, sp.position, sp.normal, eye) {
+                            Served::Light(e) => served.push((s, pp, e)),
+                            Served::NoCorner => own.push((s, pp, true)),
+                            Served::Changing => own.push((s, pp, false)),
+                        },
+                        None => own.push((s, pp, false)),
                     }
                 }
             }
@@ -95,7 +97,15 @@ impl Frame<'_> {
                 acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, e, None);
             }
         }
-        self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
+        // Sparse gathers: a pixel's samples that gather themselves on one
+        // surface share one gather (the dense render keeps every one).
+        let (own, sharing) = self.share_gathers(own, &pixels, eye);
+        let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
+        if opts.component != Component::Direct {
+            for (s, pp, leader) in sharing {
+                acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, e[leader], None);
+            }
+        }
         let Gathered { adds, stats, count } = acc;
         let out = pixels
             .iter()
@@ -108,8 +118,60 @@ impl Frame<'_> {
         Ok((out, stats, count))
     }
 
+    /// Splits the samples that gather themselves into those that gather
+    /// and those that share another's gather ([`share`]), with that one's
+    /// index among the former. The first sample of a pixel to gather is
+    /// picked at random (per pixel, from the seed), so no stratum of the
+    /// pixel is favoured.
+    fn share_gathers(
+        &self,
+        own: Vec<(u32, PacketPoint, bool)>,
+        pixels: &[(u32, u32)],
+        eye: Vec3,
+    ) -> (Vec<(u32, PacketPoint)>, Vec<(u32, PacketPoint, usize)>) {
+        let spp = self.opts.spp;
+        let width = self.scene.camera.width;
+        let samples: Vec<Unserved> = own
+            .iter()
+            .map(|(s, pp, may_share)| {
+                let (x, y) = pixels[pp.pixel];
+                let pix = u64::from(y * width + x);
+                let start =
+                    (mix(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15)) % u64::from(spp)) as u32;
+                Unserved {
+                    pixel: pp.pixel,
+                    rank: (s + spp - start) % spp,
+                    position: pp.point.position,
+                    normal: pp.point.normal,
+                    may_share: *may_share,
+                }
+            })
+            .collect();
+        let takes = share(&samples, eye);
+        // Gathering samples first, in `own`'s order; then the others, each
+        // with its gatherer's place among them.
+        let mut place = vec![usize::MAX; own.len()];
+        let (mut gathers, mut sharing) = (Vec::new(), Vec::new());
+        for (i, t) in takes.iter().enumerate() {
+            if t.is_none() {
+                place[i] = gathers.len();
+                gathers.push(i);
+            }
+        }
+        let mut own: Vec<Option<(u32, PacketPoint, bool)>> = own.into_iter().map(Some).collect();
+        let mut take = |i: usize| own[i].take().map(|(s, pp, _)| (s, pp));
+        let gathers = gathers.into_iter().filter_map(&mut take).collect();
+        for (i, t) in takes.iter().enumerate() {
+            if let (Some(j), Some((s, pp))) = (t, take(i)) {
+                sharing.push((s, pp, place[*j]));
+            }
+        }
+        (gathers, sharing)
+    }
+
     /// Cuts, splats and convolves camera samples `(s, point)` of `pixels`,
-    /// 16 to a packet: adds each one's indirect light to `acc.adds`.
+    /// 16 to a packet: adds each one's indirect light to `acc.adds`, and
+    /// returns what each gathered (irradiance, or occlusion).
     fn gather_all(
         &self,
         points: &[(u32, PacketPoint)],
@@ -117,8 +179,9 @@ impl Frame<'_> {
         acc: &mut Gathered,
         gatherer: &mut Gatherer,
         timers: &Timers,
-    ) -> Result<(), RenderError> {
+    ) -> Result<Vec<Vec3>, RenderError> {
         let spp = self.opts.spp as usize;
+        let mut gathered = Vec::with_capacity(points.len());
         for chunk in points.chunks(LANES) {
             let points: Vec<&PacketPoint> = chunk.iter().map(|(_, pp)| pp).collect();
             let receivers = points
@@ -131,17 +194,18 @@ impl Frame<'_> {
             timers.trav.add((t2 - t1).as_secs_f64());
             let out = self.gathered(&points, gatherer);
             timers.others.add(t2.elapsed().as_secs_f64());
-            for ((s, pp), (_, l)) in chunk.iter().zip(out) {
+            for ((s, pp), (e, l)) in chunk.iter().zip(out) {
                 if !l.is_finite() {
                     return Err(non_finite("gather", pixels, pp, *s, l));
                 }
                 if self.opts.component != Component::Direct {
                     acc.adds[pp.pixel * spp + *s as usize] += l;
                 }
+                gathered.push(e);
             }
             acc.count += chunk.len();
         }
-        Ok(())
+        Ok(gathered)
     }
 }
 
