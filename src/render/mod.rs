@@ -37,8 +37,7 @@ pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
 pub use options::{
-    Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_LIGHT_SAMPLES_PER_PIXEL,
-    DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
+    Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
 };
 pub use output::{RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};

@@ -103,17 +103,8 @@ impl std::fmt::Display for Gathers {
     }
 }
 
-/// Area-light samples per receiver when `RenderOptions::direct_samples` is
-/// `None`, up to 4 camera samples per pixel.
+/// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
-
-/// Area-light samples per pixel when `RenderOptions::direct_samples` is
-/// `None` and the camera samples are more than 4: split over them (at least
-/// one each). A pixel's light samples are stratified over all its camera
-/// samples (`rng::sobol2`), so what lowers its noise is their total: 16 at
-/// each of 16 camera samples spent 256 shadow rays a pixel where the
-/// camera samples' own noise (silhouettes, texture) then dominates.
-pub const DEFAULT_LIGHT_SAMPLES_PER_PIXEL: u32 = 64;
 
 /// Render settings; the defaults render the Cornell box in about a second.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,8 +123,7 @@ pub struct RenderOptions {
     /// of pixels (the default) or at every camera sample.
     pub gathers: Gathers,
     /// Area-light samples at each camera sample's receiver (`None`:
-    /// [`DEFAULT_LIGHT_SAMPLES`], or [`DEFAULT_LIGHT_SAMPLES_PER_PIXEL`]
-    /// over more than 4 camera samples), independent of the camera samples: direct
+    /// [`DEFAULT_LIGHT_SAMPLES`]), independent of the camera samples: direct
     /// light costs a few shadow rays where a gather costs a microbuffer, so
     /// its noise is cheap to take out.
     pub direct_samples: Option<u32>,
@@ -311,17 +301,8 @@ impl Default for RenderOptions {
 
 impl RenderOptions {
     /// Area-light samples at each receiver.
-    ///
-    /// ```
-    /// use pbgi::render::RenderOptions;
-    /// let at = |spp| RenderOptions { spp, ..RenderOptions::default() }.light_samples();
-    /// assert_eq!([at(1), at(4), at(8), at(16), at(100)], [16, 16, 8, 4, 1]);
-    /// let given = RenderOptions { spp: 16, direct_samples: Some(16), ..RenderOptions::default() };
-    /// assert_eq!(given.light_samples(), 16);
-    /// ```
     pub fn light_samples(&self) -> u32 {
-        self.direct_samples
-            .unwrap_or((DEFAULT_LIGHT_SAMPLES_PER_PIXEL / self.spp.max(1)).clamp(1, DEFAULT_LIGHT_SAMPLES))
+        self.direct_samples.unwrap_or(DEFAULT_LIGHT_SAMPLES)
     }
 
     /// Surfels per unit area for `scene`: `density`, or the budget over the
