@@ -173,8 +173,12 @@ impl Lattice {
             Served::NoCorner
         } else if s == 1 && (count < 2 || hi - lo > 2.0 * self.threshold * (hi + lo)) {
             Served::Changing
-        } else {
+        } else if weight > 0.0 {
             Served::Light(sum / weight)
+        } else {
+            // Its corners on its surface all weigh nothing (a sample on the
+            // cell's far edge from them, as at the film's border).
+            Served::NoCorner
         }
     }
 }
@@ -493,6 +497,11 @@ mod tests {
         // gathers itself.
         let other = lattice.irradiance((2.5, 2.5), Vec3::new(0.5, 0.3, 0.5), Vec3::Z, eye);
         assert_eq!(other, Served::NoCorner);
+        // A wall sample on the cell's left edge (the film's border): its
+        // surface's corners weigh nothing there, so it gathers too (it
+        // read 0/0 = NaN while any corner on its surface counted).
+        let edge = lattice.irradiance((0.5, 2.5), Vec3::new(1.0, 0.2, 0.5), left, eye);
+        assert_eq!(edge, Served::NoCorner);
     }
 
     #[test]

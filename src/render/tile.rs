@@ -94,7 +94,11 @@ impl Frame<'_> {
         };
         if opts.component != Component::Direct {
             for (s, pp, e) in served {
-                acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, e, None);
+                let l = self.indirect(&pp, e, None);
+                if !l.is_finite() {
+                    return Err(non_finite("interpolation from the lattice", &pixels, &pp, s, l));
+                }
+                acc.adds[pp.pixel * spp + s as usize] += l;
             }
         }
         // Sparse gathers: a pixel's samples that gather themselves on one
@@ -103,7 +107,11 @@ impl Frame<'_> {
         let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
         if opts.component != Component::Direct {
             for (s, pp, leader) in sharing {
-                acc.adds[pp.pixel * spp + s as usize] += self.indirect(&pp, e[leader], None);
+                let l = self.indirect(&pp, e[leader], None);
+                if !l.is_finite() {
+                    return Err(non_finite("a gather shared in the pixel", &pixels, &pp, s, l));
+                }
+                acc.adds[pp.pixel * spp + s as usize] += l;
             }
         }
         let Gathered { adds, stats, count } = acc;
