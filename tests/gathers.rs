@@ -114,18 +114,20 @@ fn samples_of_a_pixel_on_one_surface_share_a_gather_and_stay_within_one_percent(
     // so samples there gather themselves. At 16 camera samples a pixel's
     // samples on one facet share one gather: at most 20 % of the dense
     // render's gathers (16.1 % measured, 22.6 % gathering each), within 1 %
-    // of it (0.57 %, as without sharing).
+    // of it (0.57 %, as without sharing). Under emulation a 24×18 frame,
+    // where the lattice is most of the gathers: at most 35 % (29.3 %, 41.6 %
+    // without sharing).
     let s = pbgi::scene::builtin::scene("nave").expect("built-in");
-    let s = if common::reduced() {
-        scene(s, 24, 18)
+    let (s, share) = if common::reduced() {
+        (scene(s, 24, 18), 0.35)
     } else {
-        scene(s, 80, 60)
+        (scene(s, 80, 60), 0.2)
     };
     let opts = RenderOptions {
         spp: 16,
         ..Default::default()
     };
-    within_one_percent("nave, 16 spp", s, opts, 0.2);
+    within_one_percent("nave, 16 spp", s, opts, share);
 }
 
 #[test]
