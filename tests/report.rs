@@ -89,6 +89,7 @@ fn point(method: Method, label: &str, spp: u32, total_s: f64, rel_rmse: f64) -> 
         others_s: 1.5,
         total_s,
         rel_rmse,
+        floor: 0.0,
     }
 }
 
@@ -147,11 +148,12 @@ fn the_equal_error_table_takes_the_best_curve() {
 /// is an error naming its number.
 #[test]
 fn the_csv_reads_back_what_it_wrote() {
-    let points = vec![
+    let mut points = vec![
         point(Method::PointBased, "defaults", 1, 6.25, 0.0763),
         point(Method::PointBased, "Ω 0.02, \"dense\" gathers", 4, 14.5, 0.0284),
         point(Method::PathTracer, PATH_TRACER, 1024, 50.125, 0.0231),
     ];
+    points[1].floor = 0.0125;
     let text = to_csv("box, small", &points);
     let (scene, back) = from_csv(&text).unwrap();
     assert_eq!(scene, "box, small");
@@ -169,24 +171,57 @@ fn the_csv_reads_back_what_it_wrote() {
     assert_eq!(line2(&text, ",1,", ",one,"), (2, "bad spp"));
     assert_eq!(line2(&text, "6.250000", "inf"), (2, "not a finite number"));
     assert_eq!(line2(&text, "gathers\",", "gathers,"), (3, "a quote left open"));
-    assert_eq!(line2(&text, ",defaults,", ",a,b,"), (2, "expected 9 fields"));
+    assert_eq!(line2(&text, ",defaults,", ",a,b,"), (2, "expected 10 fields"));
     assert_eq!(
         line2(&text, "scene,", "place,"),
         (1, "not the header of an error sweep's CSV")
     );
 }
 
-/// The committed Cornell-box report (`pbgi report cornell-box`, README)
-/// reads back and writes the same CSV.
+/// The committed reports (`pbgi report`, README) read back: the nave's
+/// writes the same CSV; the Cornell box's, written before points kept
+/// their floor, reads with floor 0 and writes what reads back the same.
 #[test]
-fn the_committed_error_sweep_reads_back_and_writes_the_same_csv() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cornell-box/error.csv");
-    let text = std::fs::read_to_string(path).unwrap();
-    let (scene, points) = from_csv(&text).unwrap();
-    assert_eq!(scene, "cornell-box");
-    assert!(points.iter().any(|p| p.method == Method::PathTracer));
-    assert!(points.iter().filter(|p| p.method == Method::PointBased).count() > 5);
-    assert_eq!(to_csv(&scene, &points), text);
+fn the_committed_error_sweeps_read_back() {
+    for (scene_name, with_floor) in [("cornell-box", false), ("nave", true)] {
+        let path = format!("{}/docs/{scene_name}/error.csv", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(path).unwrap();
+        let (scene, points) = from_csv(&text).unwrap();
+        assert_eq!(scene, scene_name);
+        assert!(points.iter().any(|p| p.method == Method::PathTracer));
+        assert!(points.iter().filter(|p| p.method == Method::PointBased).count() > 5);
+        assert_eq!(points.iter().any(|p| p.floor > 0.0), with_floor);
+        let again = to_csv(&scene, &points);
+        if with_floor {
+            assert_eq!(again, text);
+        }
+        assert_eq!(from_csv(&again).unwrap(), (scene, points));
+    }
+}
+
+/// A curve whose error has a floor (its mean offset, a bias) is
+/// extrapolated along error² = floor² + c/t and never reaches an error at
+/// or below the floor, where 1/√t would claim it.
+#[test]
+fn a_curve_never_reaches_an_error_below_its_floor() {
+    use Method::PointBased;
+    let mut points = [
+        point(PointBased, "biased", 1, 1.0, 0.05),
+        point(PointBased, "biased", 4, 4.0, 0.035),
+    ];
+    points[1].floor = 0.03;
+    let rows = equal_error(&points, &[0.04, 0.032, 0.03, 0.02]);
+    let reach = |k: usize| rows[k].point_based.as_ref().map(|(_, r)| *r);
+    assert!(!reach(0).unwrap().extrapolated);
+    let r = reach(1).unwrap();
+    let want = 4.0 * (0.035f64.powi(2) - 0.03f64.powi(2)) / (0.032f64.powi(2) - 0.03f64.powi(2));
+    assert!(close(r.seconds, want) && r.extrapolated, "{r:?} against {want}");
+    assert_eq!((reach(2), reach(3)), (None, None));
+    // Without the floor: 1/√t from the last point.
+    points[1].floor = 0.0;
+    let rows = equal_error(&points, &[0.02]);
+    let r = rows[0].point_based.as_ref().unwrap().1;
+    assert!(close(r.seconds, 4.0 * (0.035f64 / 0.02).powi(2)), "{r:?}");
 }
 
 /// A whole sweep on a 16 × 16 Cornell box: every image measured, grouped

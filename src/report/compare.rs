@@ -40,6 +40,12 @@ pub struct Comparison {
     pub rel_rmse: f64,
     /// `Σ(I − R) / ΣR` over the channels: the mean's relative error.
     pub bias: f64,
+    /// The part of `rel_rmse` that the mean offset alone makes,
+    /// `|Σ(I − R)| / sqrt(n·Σ‖R‖²)` over the `n` channel values: the error
+    /// splits into the mean offset's share and the rest, so a renderer
+    /// whose offset is systematic (a bias, not noise) never gets below it,
+    /// however many samples it takes.
+    pub floor: f64,
     /// Mean of the image over the pixels and channels compared.
     pub mean: f64,
     /// Mean of the reference over the same.
@@ -78,6 +84,7 @@ pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Compar
         Ok(Comparison {
             rel_rmse: (err / norm).sqrt(),
             bias: (sum - sum_ref) / sum_ref,
+            floor: (sum - sum_ref).abs() / (n * norm).sqrt(),
             mean: sum / n,
             reference_mean: sum_ref / n,
             pixels,
@@ -221,6 +228,24 @@ mod tests {
             height: 1,
             pixels,
         }
+    }
+
+    /// The floor is the mean offset's share of the relative RMSE: all of
+    /// it for an image 10 % too bright everywhere, none of it for noise
+    /// that averages out, and between the two for both at once.
+    #[test]
+    fn the_floor_is_the_mean_offsets_share_of_the_error() {
+        let reference = image(vec![Vec3::ONE; 4]);
+        let mask = [false; 4];
+        let biased = compare(&image(vec![Vec3::splat(1.1); 4]), &reference, &mask).unwrap();
+        assert!((biased.floor - 0.1).abs() < 1e-6 && (biased.rel_rmse - 0.1).abs() < 1e-6);
+        let noisy = image([1.1, 0.9, 1.1, 0.9].map(Vec3::splat).to_vec());
+        let noisy = compare(&noisy, &reference, &mask).unwrap();
+        assert!(noisy.floor < 1e-6 && (noisy.rel_rmse - 0.1).abs() < 1e-6);
+        // Offset 0.1 and noise 0.1: RMSE √0.02, floor 0.1.
+        let both = image([1.2, 1.0, 1.2, 1.0].map(Vec3::splat).to_vec());
+        let both = compare(&both, &reference, &mask).unwrap();
+        assert!((both.floor - 0.1).abs() < 1e-6 && (both.rel_rmse - 0.02f64.sqrt()).abs() < 1e-6);
     }
 
     /// Two references `1 ± 0.1` per channel: mean 1, sample variance

@@ -7,7 +7,9 @@ use std::fmt::Write as _;
 use super::error::ReportError;
 use super::sweep::{ErrorPoint, Method};
 
-const HEADER: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse";
+const HEADER: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse,floor";
+/// The header before points kept their error's floor: read with floor 0.
+const HEADER_WITHOUT_FLOOR: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse";
 
 fn field(s: &str) -> String {
     // A line break would end the line: it becomes a space.
@@ -67,7 +69,7 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
         };
         let _ = writeln!(
             s,
-            "{},{method},{},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            "{},{method},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
             field(scene),
             field(&p.label),
             p.spp,
@@ -75,7 +77,8 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
             p.trav_s,
             p.others_s,
             p.total_s,
-            p.rel_rmse
+            p.rel_rmse,
+            p.floor
         );
     }
     s
@@ -90,8 +93,9 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
         what,
         text: line.to_string(),
     };
-    match lines.next() {
-        Some((_, h)) if h.trim() == HEADER => {}
+    let fields = match lines.next() {
+        Some((_, h)) if h.trim() == HEADER => 10,
+        Some((_, h)) if h.trim() == HEADER_WITHOUT_FLOOR => 9,
         h => {
             return Err(bad(
                 0,
@@ -99,13 +103,21 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
                 h.map_or("", |h| h.1),
             ));
         }
-    }
+    };
     let mut scene = String::new();
     let mut points = Vec::new();
     for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         let f = split(line).ok_or_else(|| bad(i, "a quote left open", line))?;
-        if f.len() != 9 {
-            return Err(bad(i, "expected 9 fields", line));
+        if f.len() != fields {
+            return Err(bad(
+                i,
+                if fields == 10 {
+                    "expected 10 fields"
+                } else {
+                    "expected 9 fields"
+                },
+                line,
+            ));
         }
         let num = |k: usize| {
             f[k].parse::<f64>()
@@ -128,6 +140,7 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
             others_s: num(6)?,
             total_s: num(7)?,
             rel_rmse: num(8)?,
+            floor: if fields == 10 { num(9)? } else { 0.0 },
         });
     }
     Ok((scene, points))

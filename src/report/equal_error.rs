@@ -12,6 +12,9 @@ pub struct Series {
     pub label: String,
     /// `(spp, seconds, relative RMSE)`, by rising spp (the cost along it).
     pub points: Vec<(u32, f64, f64)>,
+    /// The error floor of its costliest point ([`ErrorPoint::floor`]): no
+    /// extrapolation along it goes below.
+    pub floor: f64,
 }
 
 impl Series {
@@ -24,18 +27,30 @@ impl Series {
 /// The curves of `points`, in order of first appearance.
 pub fn series(points: &[ErrorPoint]) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
+    // Per series, the spp of the point its floor came from.
+    let mut floor_spp: Vec<u32> = Vec::new();
     for p in points {
         let point = (p.spp, p.total_s, p.rel_rmse);
         match out
             .iter_mut()
-            .find(|s| s.method == p.method && s.label == p.label)
+            .zip(&mut floor_spp)
+            .find(|(s, _)| s.method == p.method && s.label == p.label)
         {
-            Some(s) => s.points.push(point),
-            None => out.push(Series {
-                method: p.method,
-                label: p.label.clone(),
-                points: vec![point],
-            }),
+            Some((s, spp)) => {
+                s.points.push(point);
+                if p.spp >= *spp {
+                    (s.floor, *spp) = (p.floor, p.spp);
+                }
+            }
+            None => {
+                out.push(Series {
+                    method: p.method,
+                    label: p.label.clone(),
+                    points: vec![point],
+                    floor: p.floor,
+                });
+                floor_spp.push(p.spp);
+            }
         }
     }
     for s in &mut out {
@@ -50,17 +65,13 @@ pub struct Reach {
     /// Wall-clock seconds.
     pub seconds: f64,
     /// Whether it lies beyond the measured points (extrapolated along
-    /// error ∝ 1/√t) rather than between two of them.
+    /// error² = floor² + c/t) rather than between two of them.
     pub extrapolated: bool,
 }
 
 /// The time at which a curve of `(seconds, error)` points, in order of rising
-/// cost, first reaches `error`: between the two points that bracket it,
-/// log(time) interpolated linearly in log(error); beyond its ends along
-/// error ∝ 1/√t from the nearest point, marked extrapolated. `None` if no
-/// point has positive time and error, or if the error is below every point
-/// and the curve stopped falling (its last point no lower than the one
-/// before): the curve never reaches it.
+/// cost, first reaches `error`, for a curve with no error floor: see
+/// [`time_above_floor`].
 ///
 /// ```
 /// use pbgi::report::time_for;
@@ -73,15 +84,42 @@ pub struct Reach {
 /// assert!(time_for(&[(1.0, 0.03), (2.0, 0.03)], 0.02).is_none());
 /// ```
 pub fn time_for(curve: &[(f64, f64)], error: f64) -> Option<Reach> {
+    time_above_floor(curve, 0.0, error)
+}
+
+/// The time at which a curve of `(seconds, error)` points, in order of rising
+/// cost, first reaches `error`: between the two points that bracket it,
+/// log(time) interpolated linearly in log(error); beyond its ends along
+/// error² = floor² + c/t from the nearest point (the noise's share falling
+/// as 1/t, the floor's staying: [`ErrorPoint::floor`]), marked
+/// extrapolated. `None` if no point has positive time and error, if the
+/// error lies below every point and at or below the floor (a bias that more
+/// samples do not remove), or below every point of a curve that stopped
+/// falling (its last point no lower than the one before).
+///
+/// ```
+/// use pbgi::report::time_above_floor;
+///
+/// let curve = [(1.0, 0.05), (4.0, 0.03)];
+/// // Error² 0.0009 = 0.0004 + 0.0005: a quarter of the noise's share left
+/// // for 0.0004 + 0.000125 = 0.000525, four times the time.
+/// let r = time_above_floor(&curve, 0.02, 0.000525f64.sqrt()).unwrap();
+/// assert!((r.seconds - 16.0).abs() < 1e-9 && r.extrapolated);
+/// assert!(time_above_floor(&curve, 0.02, 0.02).is_none()); // the floor itself
+/// ```
+pub fn time_above_floor(curve: &[(f64, f64)], floor: f64, error: f64) -> Option<Reach> {
     let ok = |x: f64| x > 0.0 && x.is_finite();
     let pts: Vec<(f64, f64)> = curve.iter().copied().filter(|&(t, e)| ok(t) && ok(e)).collect();
     if !ok(error) {
         return None;
     }
+    let floor = if floor.is_finite() { floor.max(0.0) } else { 0.0 };
+    // Time along error² = floor² + c/t from the point (t, e).
+    let along = |t: f64, e: f64| t * (e * e - floor * floor).max(0.0) / (error * error - floor * floor);
     let &(t0, e0) = pts.first()?;
     if e0 <= error {
-        return Some(Reach {
-            seconds: t0 * (e0 / error).powi(2),
+        return (error > floor).then(|| Reach {
+            seconds: along(t0, e0),
             extrapolated: e0 < error,
         });
     }
@@ -96,8 +134,8 @@ pub fn time_for(curve: &[(f64, f64)], error: f64) -> Option<Reach> {
     }
     let &(tn, en) = pts.last()?;
     let still_falling = pts.len() < 2 || en < pts[pts.len() - 2].1;
-    still_falling.then(|| Reach {
-        seconds: tn * (en / error).powi(2),
+    (still_falling && error > floor).then(|| Reach {
+        seconds: along(tn, en),
         extrapolated: true,
     })
 }
@@ -135,14 +173,14 @@ pub fn equal_error(points: &[ErrorPoint], errors: &[f64]) -> Vec<EqualError> {
             let mut path_tracer = None;
             let mut point_based: Option<(String, Reach)> = None;
             for s in &all {
-                let Some(r) = time_for(&s.time_error(), error) else {
+                let Some(r) = time_above_floor(&s.time_error(), s.floor, error) else {
                     continue;
                 };
                 match s.method {
                     Method::PathTracer => path_tracer = Some(r),
                     Method::PointBased => {
-                        // Measured beats extrapolated: 1/√t flatters a curve
-                        // beyond its ends (fixed costs below, a bias floor above).
+                        // Measured beats extrapolated: the model flatters a
+                        // curve beyond its ends (fixed costs below).
                         let key = |r: &Reach| (r.extrapolated, r.seconds);
                         if point_based.as_ref().is_none_or(|b| key(&r) < key(&b.1)) {
                             point_based = Some((s.label.clone(), r));

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::equal_error::{Reach, equal_error, series, time_for};
+use super::equal_error::{Reach, equal_error, series, time_above_floor};
 use super::sweep::{ErrorPoint, Method};
 
 /// Seconds to three significant digits.
@@ -61,15 +61,18 @@ pub fn equal_error_markdown(points: &[ErrorPoint], errors: &[f64]) -> String {
     for &e in errors {
         let _ = write!(s, "| {} |", percent(e));
         for c in &all {
-            let cell = time_for(&c.time_error(), e).map_or_else(none, |r| approx(&r, seconds(r.seconds)));
+            let cell = time_above_floor(&c.time_error(), c.floor, e)
+                .map_or_else(none, |r| approx(&r, seconds(r.seconds)));
             let _ = write!(s, " {cell} |");
         }
         let _ = writeln!(s);
     }
     let _ = writeln!(
         s,
-        "\n~ extrapolated beyond the measured points along error ∝ 1/√t; \
-         — not reached (the curve's error stopped falling above it)."
+        "\n~ extrapolated beyond the measured points along error² = floor² + c/t, the floor \
+         being the share of the costliest point's error that its mean offset makes (a bias \
+         stays as the noise falls); — not reached (at or below that floor, or the curve's \
+         error stopped falling above it)."
     );
     s
 }

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use super::compare::{emitter_mask, relative_rmse};
+use super::compare::{compare, emitter_mask};
 use super::error::ReportError;
 use super::eta::Eta;
 use crate::cut::{CutOptions, SchemeChoice};
@@ -42,6 +42,10 @@ pub struct ErrorPoint {
     pub total_s: f64,
     /// Relative RMSE against the reference, emitters left out.
     pub rel_rmse: f64,
+    /// The share of `rel_rmse` that the image's mean offset makes
+    /// ([`Comparison::floor`](super::compare::Comparison::floor)): where
+    /// the offset is a bias, more samples do not take the error below it.
+    pub floor: f64,
 }
 
 /// A point-based curve: its settings, fixed along it, and the camera samples
@@ -325,7 +329,7 @@ pub fn check_reference(scene: &Scene, reference: &Image) -> Result<(), ReportErr
 }
 
 /// Renders every point of `opts` and measures it against `reference`
-/// ([`relative_rmse`], emitters left out). `progress` is called as the
+/// ([`compare`], emitters left out). `progress` is called as the
 /// images advance and once at the end. The points come back grouped by
 /// curve (the point-based ones in `opts.curves`' order, then the path
 /// tracer's), cheapest first within each.
@@ -374,6 +378,7 @@ pub fn error_sweep(
                 };
                 let out = render(scene, &ro, &on_part)?;
                 let t = &out.timings;
+                let m = compare(&out.image, reference, &mask)?;
                 ErrorPoint {
                     method: Method::PointBased,
                     label: opts.curves[c].label.clone(),
@@ -382,7 +387,8 @@ pub fn error_sweep(
                     trav_s: t.trav,
                     others_s: t.others,
                     total_s: t.total_wall,
-                    rel_rmse: relative_rmse(&out.image, reference, &mask)?,
+                    rel_rmse: m.rel_rmse,
+                    floor: m.floor,
                 }
             }
             None => {
@@ -394,6 +400,7 @@ pub fn error_sweep(
                     ..Default::default()
                 };
                 let out = render_reference(scene, &ro, &on_part)?;
+                let m = compare(&out.image, reference, &mask)?;
                 ErrorPoint {
                     method: Method::PathTracer,
                     label: PATH_TRACER.into(),
@@ -402,7 +409,8 @@ pub fn error_sweep(
                     trav_s: 0.0,
                     others_s: 0.0,
                     total_s: out.seconds,
-                    rel_rmse: relative_rmse(&out.image, reference, &mask)?,
+                    rel_rmse: m.rel_rmse,
+                    floor: m.floor,
                 }
             }
         };
