@@ -190,7 +190,7 @@ pub(crate) enum Served {
     Light(Vec3),
     /// No corner lies on its surface (a thin object, a facet between
     /// lattice points): it gathers, and its pixel's other such samples on
-    /// the same surface may share that gather (`Frame::share_gathers`).
+    /// the same surface may share that gather ([`share`]).
     NoCorner,
     /// Its one-pixel cell's light changes too much, or only one corner lies
     /// on its surface: the light changes within the pixel, so it gathers
