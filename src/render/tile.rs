@@ -18,6 +18,10 @@ use crate::gather::{Gather, Gatherer};
 use crate::rng::mix;
 use crate::simd::LANES;
 
+/// Camera sample `s` of a point that takes the irradiance of gather
+/// `usize` (its place among the tile's gathering samples).
+type Sharing = (u32, PacketPoint, usize);
+
 /// What a tile's gathers leave: each camera sample's light (`[k * spp +
 /// s]`), the traversal counters and the number of receivers gathered.
 struct Gathered {
@@ -136,7 +140,7 @@ impl Frame<'_> {
         own: Vec<(u32, PacketPoint, bool)>,
         pixels: &[(u32, u32)],
         eye: Vec3,
-    ) -> (Vec<(u32, PacketPoint)>, Vec<(u32, PacketPoint, usize)>) {
+    ) -> (Vec<(u32, PacketPoint)>, Vec<Sharing>) {
         let spp = self.opts.spp;
         let width = self.scene.camera.width;
         let samples: Vec<Unserved> = own
