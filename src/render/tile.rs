@@ -96,24 +96,23 @@ impl Frame<'_> {
             stats: TraversalStats::default(),
             count: 0,
         };
-        if opts.component != Component::Direct {
-            for (s, pp, e) in served {
-                let l = self.indirect(&pp, e, None);
-                if !l.is_finite() {
-                    return Err(non_finite("interpolation from the lattice", &pixels, &pp, s, l));
-                }
-                acc.adds[pp.pixel * spp + s as usize] += l;
-            }
-        }
         // Sparse gathers: a pixel's samples that gather themselves on one
         // surface share one gather (the dense render keeps every one).
         let (own, sharing) = self.share_gathers(own, &pixels, eye);
         let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
         if opts.component != Component::Direct {
-            for (s, pp, leader) in sharing {
-                let l = self.indirect(&pp, e[leader], None);
+            // Irradiance not gathered at the sample itself: each sample gets
+            // one indirect term, whether gathered, interpolated or shared.
+            let interpolated = served
+                .into_iter()
+                .map(|(s, pp, e)| (s, pp, e, "interpolation from the lattice"));
+            let shared = sharing
+                .into_iter()
+                .map(|(s, pp, leader)| (s, pp, e[leader], "a gather shared in the pixel"));
+            for (s, pp, e, stage) in interpolated.chain(shared) {
+                let l = self.indirect(&pp, e, None);
                 if !l.is_finite() {
-                    return Err(non_finite("a gather shared in the pixel", &pixels, &pp, s, l));
+                    return Err(non_finite(stage, &pixels, &pp, s, l));
                 }
                 acc.adds[pp.pixel * spp + s as usize] += l;
             }
@@ -160,22 +159,19 @@ impl Frame<'_> {
             })
             .collect();
         let takes = share(&samples, eye);
-        // Gathering samples first, in `own`'s order; then the others, each
-        // with its gatherer's place among them.
-        let mut place = vec![usize::MAX; own.len()];
+        // Each gathering sample's place among them, in `own`'s order.
+        let place: Vec<usize> = takes
+            .iter()
+            .scan(0, |n, t| {
+                *n += usize::from(t.is_none());
+                Some(*n - 1)
+            })
+            .collect();
         let (mut gathers, mut sharing) = (Vec::new(), Vec::new());
-        for (i, t) in takes.iter().enumerate() {
-            if t.is_none() {
-                place[i] = gathers.len();
-                gathers.push(i);
-            }
-        }
-        let mut own: Vec<Option<(u32, PacketPoint, bool)>> = own.into_iter().map(Some).collect();
-        let mut take = |i: usize| own[i].take().map(|(s, pp, _)| (s, pp));
-        let gathers = gathers.into_iter().filter_map(&mut take).collect();
-        for (i, t) in takes.iter().enumerate() {
-            if let (Some(j), Some((s, pp))) = (t, take(i)) {
-                sharing.push((s, pp, place[*j]));
+        for ((s, pp, _), t) in own.into_iter().zip(&takes) {
+            match t {
+                None => gathers.push((s, pp)),
+                Some(j) => sharing.push((s, pp, place[*j])),
             }
         }
         (gathers, sharing)

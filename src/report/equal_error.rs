@@ -27,31 +27,27 @@ impl Series {
 /// The curves of `points`, in order of first appearance.
 pub fn series(points: &[ErrorPoint]) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
-    // Per series, the spp of the point its floor came from.
-    let mut floor_spp: Vec<u32> = Vec::new();
     for p in points {
         let point = (p.spp, p.total_s, p.rel_rmse);
         match out
             .iter_mut()
-            .zip(&mut floor_spp)
-            .find(|(s, _)| s.method == p.method && s.label == p.label)
+            .find(|s| s.method == p.method && s.label == p.label)
         {
-            Some((s, spp)) => {
-                s.points.push(point);
-                if p.spp >= *spp {
-                    (s.floor, *spp) = (p.floor, p.spp);
-                }
-            }
-            None => {
-                out.push(Series {
-                    method: p.method,
-                    label: p.label.clone(),
-                    points: vec![point],
-                    floor: p.floor,
-                });
-                floor_spp.push(p.spp);
-            }
+            Some(s) => s.points.push(point),
+            None => out.push(Series {
+                method: p.method,
+                label: p.label.clone(),
+                points: vec![point],
+                floor: 0.0,
+            }),
         }
+    }
+    for s in &mut out {
+        let costliest = points
+            .iter()
+            .filter(|p| p.method == s.method && p.label == s.label)
+            .max_by_key(|p| p.spp);
+        s.floor = costliest.map_or(0.0, |p| p.floor);
     }
     for s in &mut out {
         s.points.sort_by_key(|p| p.0);
@@ -110,10 +106,11 @@ pub fn time_for(curve: &[(f64, f64)], error: f64) -> Option<Reach> {
 pub fn time_above_floor(curve: &[(f64, f64)], floor: f64, error: f64) -> Option<Reach> {
     let ok = |x: f64| x > 0.0 && x.is_finite();
     let pts: Vec<(f64, f64)> = curve.iter().copied().filter(|&(t, e)| ok(t) && ok(e)).collect();
-    if !ok(error) {
+    // A floor that is no error (negative, NaN, infinite) says nothing of
+    // where the curve goes: no answer, as for such an error.
+    if !ok(error) || !(floor >= 0.0 && floor.is_finite()) {
         return None;
     }
-    let floor = if floor.is_finite() { floor.max(0.0) } else { 0.0 };
     // Time along error² = floor² + c/t from the point (t, e).
     let along = |t: f64, e: f64| t * (e * e - floor * floor).max(0.0) / (error * error - floor * floor);
     let &(t0, e0) = pts.first()?;
