@@ -27,12 +27,21 @@ impl GlossyLobe {
         2.0 * n.dot(wo) * n - wo
     }
 
+    /// `r·ωi`, at most 1: rounding leaves it a few ulp above 1 near the
+    /// mirror direction, which `c^e` at `e ≈ 2·10⁶` would raise to many
+    /// times the lobe's peak (or to infinity for a direction a little off
+    /// unit length).
+    #[inline]
+    fn cosine(n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        Self::mirror(n, wo).dot(wi).min(1.0)
+    }
+
     /// `f_s(ωi, ωo)`, zero when `ωi` or `ωo` is below the surface.
     pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         if n.dot(wi) <= 0.0 || n.dot(wo) <= 0.0 {
             return Vec3::ZERO;
         }
-        let c = Self::mirror(n, wo).dot(wi);
+        let c = Self::cosine(n, wo, wi);
         if c <= 0.0 {
             return Vec3::ZERO;
         }
@@ -42,7 +51,7 @@ impl GlossyLobe {
 
     /// Density (solid angle) of [`sample`](Self::sample) producing `wi`.
     pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-        let c = Self::mirror(n, wo).dot(wi);
+        let c = Self::cosine(n, wo, wi);
         if c <= 0.0 {
             return 0.0;
         }
@@ -100,6 +109,42 @@ mod tests {
                 "roughness {roughness}: albedo {a} far below specular"
             );
         }
+    }
+
+    /// The sharpest lobe (roughness clamped at 10⁻³: exponent ≈ 2·10⁶)
+    /// seen along its own mirror direction: rounding puts `r·ωi` a few ulp
+    /// above 1, and `c^e` must not turn that into a peak above the lobe's
+    /// maximum `specular·(e + 2)/(2π)` (it overflowed to infinity for a
+    /// direction a few parts in 10³ off unit length: a fuzzed input,
+    /// `fuzz/regressions/microbuffer/glossy-infinite-cosine-above-one`).
+    #[test]
+    fn the_sharpest_lobe_stays_below_its_peak_where_rounding_puts_the_cosine_above_one() {
+        let lobe = GlossyLobe {
+            specular: Vec3::ONE,
+            roughness: 1e-20,
+        };
+        let peak = (lobe.exponent() + 2.0) * std::f32::consts::FRAC_1_PI * 0.5;
+        let mut rng = Rng::new(5);
+        let mut worst = 0.0f32;
+        for _ in 0..10_000 {
+            let n = rng.unit_vector();
+            let wo = rng.unit_vector();
+            if n.dot(wo) <= 0.0 {
+                continue;
+            }
+            let wi = 2.0 * n.dot(wo) * n - wo;
+            for (got, what) in [(lobe.eval(n, wo, wi).x, "eval"), (lobe.pdf(n, wo, wi), "pdf")] {
+                assert!(got.is_finite(), "{what} {got} for n {n}, wo {wo}");
+                worst = worst.max(got / peak);
+            }
+        }
+        assert!(worst <= 1.000_01, "a lobe value {worst} times its peak");
+        // A direction slightly off unit length, as `try_normalize` leaves a
+        // tiny vector.
+        let wo = Vec3::splat(-2.5743157e-22).try_normalize().unwrap();
+        let n = -Vec3::ONE.normalize();
+        let got = lobe.eval(n, wo, n).x;
+        assert!(got.is_finite() && got <= peak * 1.000_01, "eval {got} above the peak {peak}");
     }
 
     #[test]
