@@ -144,7 +144,10 @@ mod tests {
         let wo = Vec3::splat(-2.5743157e-22).try_normalize().unwrap();
         let n = -Vec3::ONE.normalize();
         let got = lobe.eval(n, wo, n).x;
-        assert!(got.is_finite() && got <= peak * 1.000_01, "eval {got} above the peak {peak}");
+        assert!(
+            got.is_finite() && got <= peak * 1.000_01,
+            "eval {got} above the peak {peak}"
+        );
     }
 
     #[test]

@@ -194,7 +194,16 @@ impl MicroBuffer {
     /// a shading pipeline compiles it with its own instruction set).
     #[inline(always)]
     pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
-        compose::irradiance(&self.table, &self.frags, tree, self.sky().as_ref())
+        compose::irradiance(&self.table, &self.frags, tree, &self.site(), self.sky().as_ref())
+    }
+
+    /// The receiver, for the composition.
+    #[inline(always)]
+    fn site(&self) -> compose::Site {
+        compose::Site {
+            position: self.position,
+            frame: self.frame,
+        }
     }
 
     /// What the open pixels see.
@@ -212,7 +221,14 @@ impl MicroBuffer {
     pub fn glossy(&self, tree: &Tree, wo: Vec3, lobe: &GlossyLobe) -> Vec3 {
         let n = self.frame[2];
         let f = |p: usize| lobe.eval(n, wo, self.to_world(self.table.dir[p]));
-        compose::reflected(&self.table, &self.frags, tree, f, self.sky().as_ref())
+        compose::reflected(
+            &self.table,
+            &self.frags,
+            tree,
+            &self.site(),
+            f,
+            self.sky().as_ref(),
+        )
     }
 
     /// Ambient occlusion: the covered fraction of the cosine-weighted
@@ -225,7 +241,7 @@ impl MicroBuffer {
     /// [`occlusion`](Self::occlusion), inlined into the caller.
     #[inline(always)]
     pub(crate) fn occlusion_inline(&self, tree: &Tree) -> f32 {
-        compose::occlusion(&self.table, &self.frags, tree)
+        compose::occlusion(&self.table, &self.frags, tree, &self.site())
     }
 
     /// Fragments left by the splats so far (for counters and tests).

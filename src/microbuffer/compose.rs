@@ -3,57 +3,48 @@
 //! microbuffer, so they give the same bits by construction.
 //!
 //! A splat leaves one fragment in each pixel it touches: its depth, its node
-//! and the fraction of the pixel it covers. A pixel's fragments are sorted by
-//! `(depth − R, depth, node, coverage)`, `R` the node's bounding radius: a
-//! canonical order, so the composition depends on the set of splats only and
-//! plain `f32` sums are deterministic. The sorted fragments are swept into
-//! *layers* (runs whose depth intervals `[depth − R, depth + R]` overlap: one
-//! surface, seen through several splats); a layer adds its summed coverage
-//! and radiance unclamped (the disks of a surface tile it about once, so
-//! clamping each pixel at one would lose the overlaps and keep the gaps), and
-//! hides what lies behind it in proportion `κ·coverage` (opaque at half
-//! coverage: splats of a surface leave gaps that would let light leak
-//! through).
+//! and the fraction of the pixel it covers. Composition works on the pixel's
+//! 4×4 sub-samples, one per lane (`samples`): each fragment's coverage is
+//! spread over the sub-samples its footprint covers, with a depth interval
+//! at each (the node's plane along the sub-sample's ray, widened by how far
+//! the footprint's placement may be off; `±R` for a cluster that faces
+//! several ways). At each sub-sample the *front layer* is every fragment
+//! whose interval reaches the nearest fragment's: one surface, seen through
+//! several splats, whose coverage adds unclamped (the disks of a surface
+//! tile it about once, so a clamp at one would lose the overlaps and keep
+//! the gaps). Everything behind adds through `1 − κ·coverage` of the front
+//! layer (opaque at half coverage: a surface's splats leave gaps that would
+//! let light leak through). A pixel is the mean of its sub-samples.
 //!
-//! Measured on the closed-form references (`pbgi::exact`, BENCHMARKS.md):
-//! this composition, with cos-exact small splats, normalised cones and
-//! uninflated disks, converges as Ω → 0 and is flat in N, where one owner's
-//! radiance per pixel with coverage clamped at one grew worse with both.
+//! Why sub-samples: a pixel's fragments swept into layers by chaining
+//! overlapping `[d − R, d + R]` intervals merged a block's top with the lit
+//! floor behind it (the Cornell box's indirect light +1.4 % too bright, the
+//! nave's +7 %), and a half-covered layer hid a whole pixel of light at a
+//! silhouette. Where in the pixel a fragment lies, and its plane's depth
+//! there, separate both (`docs/exact/findings.md`).
+//!
+//! The fragments of a pixel are taken in a canonical order, `(node,
+//! coverage)`, so the `f32` sums depend on the set of splats only, not on
+//! the order a traversal scheme reported them in; no depth sort is needed.
 
 use glam::Vec3;
+use std::simd::prelude::*;
 
 use super::fragments::Fragments;
+use super::samples::{Pixel, SAMPLES, Shape, lanes};
 use super::table::Table;
 use crate::environment::Environment;
+use crate::simd::{F32s, Real};
 use crate::tree::Tree;
 
-/// How much of what lies behind a layer it hides per unit of coverage.
+/// How much of what lies behind the front layer it hides per unit of
+/// coverage.
 const KAPPA: f32 = 2.0;
 
-/// A fragment in sort order: `(near, node)` as one integer (the near depth's
-/// bits mapped to an unsigned order), the coverage's bits (equal keys are
-/// the same node twice in one pixel, showing the same radiance), the
-/// fragment's index.
-type Sorted = (u64, u32, u32);
-
-/// `x`'s bits, ordered like `f32::total_cmp` orders `x`.
-#[inline(always)]
-fn ordered(x: f32) -> u32 {
-    let b = x.to_bits();
-    if b >> 31 == 1 { !b } else { b | 0x8000_0000 }
-}
-
-/// The inverse of [`ordered`].
-#[inline(always)]
-fn unordered(o: u32) -> f32 {
-    f32::from_bits(if o >> 31 == 1 { o & 0x7FFF_FFFF } else { !o })
-}
-
-/// `a` before `b` in the canonical order (a total order on the fields).
-#[inline(always)]
-fn before(a: &Sorted, b: &Sorted) -> bool {
-    (a.0, a.1) < (b.0, b.1)
-}
+/// A fragment in the canonical order: `(node, coverage bits)` as one key
+/// (equal keys are the same node twice in one pixel: the same fragment),
+/// and the fragment's index.
+type Sorted = (u64, u32);
 
 /// Moves `v[root]` down the max-heap `v[..end]`.
 #[inline(always)]
@@ -63,10 +54,10 @@ fn sift(v: &mut [Sorted], mut root: usize, end: usize) {
         if child >= end {
             break;
         }
-        if child + 1 < end && before(&v[child], &v[child + 1]) {
+        if child + 1 < end && v[child].0 < v[child + 1].0 {
             child += 1;
         }
-        if !before(&v[root], &v[child]) {
+        if v[root].0 >= v[child].0 {
             break;
         }
         v.swap(root, child);
@@ -74,7 +65,8 @@ fn sift(v: &mut [Sorted], mut root: usize, end: usize) {
     }
 }
 
-/// Sorts a pixel's fragments: insertion sort for the usual few dozen, heap
+/// Sorts a pixel's fragments by key: insertion sort for the usual few
+/// dozen (mostly in order already: splats arrive about in node order), heap
 /// sort for long buckets (written out: a sort taking a closure would be
 /// compiled out of line, for the baseline target, not the kernel's clone).
 #[inline(always)]
@@ -83,7 +75,7 @@ fn sort(v: &mut [Sorted]) {
         for i in 1..v.len() {
             let x = v[i];
             let mut j = i;
-            while j > 0 && before(&x, &v[j - 1]) {
+            while j > 0 && x.0 < v[j - 1].0 {
                 v[j] = v[j - 1];
                 j -= 1;
             }
@@ -101,8 +93,15 @@ fn sort(v: &mut [Sorted]) {
     }
 }
 
+/// The receiver a microbuffer belongs to: its position and local frame
+/// (x, y, z = normal, in world space).
+pub(crate) struct Site {
+    pub position: Vec3,
+    pub frame: [Vec3; 3],
+}
+
 /// The composed pixels of one receiver: per pixel the effective coverage
-/// and the radiance it lets through (`Σ layers T·Σ coverage·L`).
+/// and the radiance it lets through.
 pub(crate) struct Composed {
     pub cover: Vec<f32>,
     pub radiance: Vec<Vec3>,
@@ -110,11 +109,47 @@ pub(crate) struct Composed {
     pub brightest: Vec3,
 }
 
-/// Composes every pixel of `t` from `frags` (in any order). `radiance`:
-/// also sum the nodes' radiance (occlusion needs none).
+/// Sums the lanes in lane order, as a fraction of the pixel.
 #[inline(always)]
-pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool) -> Composed {
-    let pixels = t.dir.len();
+fn mean(v: F32s) -> f32 {
+    let mut s = 0.0f32;
+    for x in v.to_array() {
+        s += x;
+    }
+    s * (1.0 / SAMPLES as f32)
+}
+
+/// Composes every pixel of `t` from `frags` (in any order), seen from
+/// `site`. `radiance`: also sum the nodes' radiance (occlusion needs none).
+#[inline(always)]
+pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, radiance: bool) -> Composed {
+    let (pixels, n) = (t.dir.len(), frags.len());
+    // Half the smallest sub-sample's angular size (chord): a footprint
+    // narrower than that covers one sub-sample at most.
+    let half_sample = t.pixel_size[..pixels]
+        .iter()
+        .copied()
+        .fold(f32::INFINITY, f32::min)
+        * 0.125;
+    // One shape per splat (its fragments are consecutive).
+    let mut shapes: Vec<Shape> = Vec::new();
+    let mut shape_of = vec![0u32; n];
+    let mut last = None;
+    for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
+        let node = (key & 0xFFFF_FFFF) as u32;
+        if last != Some(node) {
+            shapes.push(Shape::of(
+                tree,
+                node,
+                site.position,
+                &site.frame,
+                t.n,
+                half_sample,
+            ));
+            last = Some(node);
+        }
+        *of = shapes.len() as u32 - 1;
+    }
     // Bucket by pixel (a counting sort: O(n)).
     let mut start = vec![0u32; pixels + 1];
     for &p in &frags.pixel {
@@ -124,20 +159,11 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         start[p + 1] += start[p];
     }
     let mut next = start.clone();
-    let mut sorted: Vec<Sorted> = vec![(0, 0, 0); frags.pixel.len()];
-    let mut far = vec![0.0f32; frags.pixel.len()];
-    for i in 0..frags.pixel.len() {
-        let key = frags.key[i];
-        let depth = f32::from_bits((key >> 32) as u32);
-        let r = tree.bounding_radius((key & 0xFFFF_FFFF) as u32);
+    let mut sorted: Vec<Sorted> = vec![(0, 0); n];
+    for i in 0..n {
         let slot = &mut next[frags.pixel[i] as usize];
-        let node = key & 0xFFFF_FFFF;
-        sorted[*slot as usize] = (
-            u64::from(ordered(depth - r)) << 32 | node,
-            frags.cover[i].to_bits(),
-            i as u32,
-        );
-        far[i] = depth + r;
+        let node = frags.key[i] & 0xFFFF_FFFF;
+        sorted[*slot as usize] = (node << 32 | u64::from(frags.cover[i].to_bits()), i as u32);
         *slot += 1;
     }
     let mut out = Composed {
@@ -145,40 +171,67 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
         radiance: vec![Vec3::ZERO; if radiance { pixels } else { 0 }],
         brightest: Vec3::ZERO,
     };
+    if radiance {
+        for r in &frags.radiance {
+            out.brightest = out.brightest.max(Vec3::from_array(*r));
+        }
+    }
+    let zero = F32s::splat(0.0);
+    let mut seen: Vec<(F32s, F32s, u32)> = Vec::new();
     for p in 0..pixels {
         let bucket = &mut sorted[start[p] as usize..start[p + 1] as usize];
         if bucket.is_empty() {
             continue;
         }
         sort(bucket);
-        // Sweep into layers: `t_pass` passes through the layers closed so
-        // far, `(c, l)` is what they showed, `(s, ls)` the open layer and
-        // `end` its far depth.
-        let (mut t_pass, mut c, mut l) = (1.0f32, 0.0f32, Vec3::ZERO);
-        let (mut s, mut ls, mut end) = (0.0f32, Vec3::ZERO, f32::NEG_INFINITY);
-        for &(near_node, cover, i) in bucket.iter() {
-            let (near, cover, i) = (
-                unordered((near_node >> 32) as u32),
-                f32::from_bits(cover),
-                i as usize,
+        let [sx, sy, sz] = &t.sub[p];
+        let px = Pixel {
+            col: (p % t.n) as f32,
+            row: (p / t.n) as f32,
+            ux: F32s::from_array(*sx),
+            uy: F32s::from_array(*sy),
+            uz: F32s::from_array(*sz),
+            size: t.pixel_size[p] * 0.25,
+        };
+        // The nearest fragment at each sub-sample, and its far depth.
+        seen.clear();
+        let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
+        for &(_, i) in bucket.iter() {
+            let l = lanes(
+                &shapes[shape_of[i as usize] as usize],
+                &px,
+                frags.cover[i as usize],
             );
-            if near > end && s > 0.0 {
-                c += t_pass * s;
-                l += ls * t_pass;
-                t_pass *= (1.0 - KAPPA * s).max(0.0);
-                (s, ls) = (0.0, Vec3::ZERO);
-            }
-            end = end.max(far[i]);
-            s += cover;
+            let nearer = zero.simd_lt(l.cover) & l.near.simd_lt(nearest);
+            nearest = F32s::select(nearer, l.near, nearest);
+            reach = F32s::select(nearer, l.far, reach);
+            seen.push((l.cover, l.near, i));
+        }
+        // The front layer (what reaches the nearest fragment's far depth),
+        // and what lies behind it.
+        let (mut front, mut behind) = (zero, zero);
+        let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
+        for &(cover, near, i) in &seen {
+            let a = F32s::select(near.simd_le(reach), cover, zero);
+            let b = cover - a;
+            front += a;
+            behind += b;
             if radiance {
-                let r = Vec3::from_array(frags.radiance[i]);
-                ls += r * cover;
-                out.brightest = out.brightest.max(r);
+                let r = frags.radiance[i as usize];
+                for c in 0..3 {
+                    lf[c] += a * F32s::splat(r[c]);
+                    lb[c] += b * F32s::splat(r[c]);
+                }
             }
         }
-        out.cover[p] = c + t_pass * s;
+        let through = (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero);
+        out.cover[p] = mean(front + through * behind);
         if radiance {
-            out.radiance[p] = l + ls * t_pass;
+            out.radiance[p] = Vec3::new(
+                mean(lf[0] + through * lb[0]),
+                mean(lf[1] + through * lb[1]),
+                mean(lf[2] + through * lb[2]),
+            );
         }
     }
     out
@@ -191,14 +244,14 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, radiance: bool)
 /// hemisphere, and where that radiance is uniform the exact answer is the
 /// bound itself.
 #[inline(always)]
-pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree, sky: Option<&Sky>) -> Vec3 {
+pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, sky: Option<&Sky>) -> Vec3 {
     // Taken apart: the drop of the whole would be out-of-line glue,
     // compiled for the baseline target (scripts/check-asm.sh).
     let Composed {
         cover,
         radiance,
         brightest,
-    } = compose(t, frags, tree, true);
+    } = compose(t, frags, tree, site, true);
     let mut e = Vec3::ZERO;
     for (l, w) in radiance.iter().zip(&t.cos_weight) {
         e += *l * *w;
@@ -238,8 +291,8 @@ impl Sky<'_> {
 
 /// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
 #[inline(always)]
-pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree) -> f32 {
-    let Composed { cover, radiance, .. } = compose(t, frags, tree, false);
+pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree, site: &Site) -> f32 {
+    let Composed { cover, radiance, .. } = compose(t, frags, tree, site, false);
     drop(radiance);
     let mut o = 0.0f32;
     for (c, w) in cover.iter().zip(&t.cos_weight) {
@@ -255,10 +308,11 @@ pub(crate) fn reflected(
     t: &Table,
     frags: &Fragments,
     tree: &Tree,
+    site: &Site,
     f: impl Fn(usize) -> Vec3,
     sky: Option<&Sky>,
 ) -> Vec3 {
-    let c = compose(t, frags, tree, true);
+    let c = compose(t, frags, tree, site, true);
     let mut e = Vec3::ZERO;
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {

@@ -13,18 +13,21 @@
 //! the cosine weight is largest.
 //!
 //! **Composition** (docs/design.md §3): a splat leaves a fragment (depth,
-//! node, coverage) in each pixel it touches; `compose` sorts each pixel's
-//! fragments into a canonical order (by depth interval, node and
-//! coverage), sweeps them into depth layers and convolves, so the shading
-//! depends on the set of splats only, not on the order a traversal scheme
-//! reports them in, and both pipelines share one composition.
+//! node, coverage) in each pixel it touches; `compose` spreads each
+//! fragment over the pixel's 4×4 sub-samples (`samples`), keeps at each the
+//! front layer (the fragments reaching the nearest one's depth interval)
+//! over what lies behind it, and convolves. Fragments are taken in node
+//! order, so the shading depends on the set of splats only, not on the
+//! order a traversal scheme reports them in, and both pipelines share one
+//! composition.
 //!
 //! Data enters as a receiver (position, normal: [`MicroBuffer::reset`]) and
 //! its cut (node ids of a [`Tree`](crate::Tree)); it leaves as irradiance,
 //! occlusion or glossy radiance. The files, in data-flow order: `table`
 //! (the map and its per-pixel tables), `locate` (where a node falls),
 //! `fragments` (what a splat leaves in a pixel), `buffer` (a receiver's
-//! fragments and the convolutions' entry points), `compose`
+//! fragments and the convolutions' entry points), `samples` (a fragment at
+//! the pixel's sub-samples), `compose`
 //! (fragments to pixels, pixels to irradiance, occlusion or glossy), `plan`
 //! (a splat's class and footprint), `draw` (the scalar draw), `tiles` (the
 //! 16-lane draw), `shade` (the two shading pipelines: [`shade_cuts`] and
@@ -36,6 +39,7 @@ mod draw;
 mod fragments;
 mod locate;
 mod plan;
+mod samples;
 mod shade;
 mod table;
 mod tiles;

@@ -108,6 +108,10 @@ pub(crate) struct Table {
     /// the sine of its angle from the normal: no pixel's ray leans further.
     pub(crate) lowest_z: f32,
     pub(crate) lowest_sin: f32,
+    /// Per pixel the local directions (x, y, z by lane) of its 4×4
+    /// sub-samples, the centres of a 4×4 grid over the pixel's square, row
+    /// by row (`samples`).
+    pub(crate) sub: Vec<[[f32; LANES]; 3]>,
 }
 
 /// Footprints up to this many pixels from their centre use the local reach.
@@ -167,6 +171,18 @@ impl Table {
             v
         };
         let (dir_x, dir_y, dir_z) = (component(|d| d.x), component(|d| d.y), component(|d| d.z));
+        let mut sub = Vec::with_capacity(len);
+        for r in 0..n {
+            for c in 0..n {
+                let (u0, v0) = (-1.0 + c as f64 * h, -1.0 + r as f64 * h);
+                let d: [Vec3; LANES] = std::array::from_fn(|k| {
+                    let (i, j) = ((k % 4) as f64, (k / 4) as f64);
+                    unmap(u0 + (i + 0.5) * 0.25 * h, v0 + (j + 0.5) * 0.25 * h).as_vec3()
+                });
+                let s = [d.map(|d| d.x), d.map(|d| d.y), d.map(|d| d.z)];
+                sub.push(s);
+            }
+        }
         Table {
             n,
             dir,
@@ -181,6 +197,7 @@ impl Table {
             reach_max,
             lowest_z,
             lowest_sin: (1.0 - lowest_z * lowest_z).max(0.0).sqrt(),
+            sub,
         }
     }
 
