@@ -31,7 +31,7 @@ use glam::Vec3;
 use std::simd::prelude::*;
 
 use super::fragments::Fragments;
-use super::samples::{Pixel, SAMPLES, Shape, lanes};
+use super::samples::{Packed, Pixel, SAMPLES, Shape, lanes};
 use super::table::Table;
 use crate::environment::Environment;
 use crate::simd::{F32s, Real};
@@ -132,20 +132,14 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         .fold(f32::INFINITY, f32::min)
         * 0.125;
     // One shape per splat (its fragments are consecutive).
-    let mut shapes: Vec<Shape> = Vec::new();
+    let mut shapes: Vec<Packed> = Vec::new();
     let mut shape_of = vec![0u32; n];
     let mut last = None;
     for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
         let node = (key & 0xFFFF_FFFF) as u32;
         if last != Some(node) {
-            shapes.push(Shape::of(
-                tree,
-                node,
-                site.position,
-                &site.frame,
-                t.n,
-                half_sample,
-            ));
+            let shape = Shape::of(tree, node, site.position, &site.frame, t.n, half_sample);
+            shapes.push(shape.pack());
             last = Some(node);
         }
         *of = shapes.len() as u32 - 1;
@@ -197,11 +191,8 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         seen.clear();
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
         for &(_, i) in bucket.iter() {
-            let l = lanes(
-                &shapes[shape_of[i as usize] as usize],
-                &px,
-                frags.cover[i as usize],
-            );
+            let shape = Shape::unpack(&shapes[shape_of[i as usize] as usize]);
+            let l = lanes(&shape, &px, frags.cover[i as usize]);
             let nearer = zero.simd_lt(l.cover) & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);
             reach = F32s::select(nearer, l.far, reach);

@@ -120,6 +120,60 @@ impl Shape {
     }
 }
 
+/// A [`Shape`] as plain floats, for storage: a `Vec` of the crate's own
+/// type would grow through code compiled for the baseline target, outside
+/// the kernel's clone (`scripts/check-asm.sh`).
+pub(crate) type Packed = [f32; 20];
+
+impl Shape {
+    /// The shape as plain floats.
+    #[inline(always)]
+    pub(crate) fn pack(&self) -> Packed {
+        [
+            self.kind as f32,
+            self.v.x,
+            self.v.y,
+            self.v.z,
+            self.d,
+            self.w.x,
+            self.w.y,
+            self.w.z,
+            self.m.x,
+            self.m.y,
+            self.m.z,
+            self.mv,
+            self.r2,
+            self.x,
+            self.y,
+            if self.small { 1.0 } else { 0.0 },
+            self.tan,
+            self.radius,
+            self.reach,
+            0.0,
+        ]
+    }
+
+    /// The shape [`pack`](Self::pack) stored.
+    #[inline(always)]
+    pub(crate) fn unpack(p: &Packed) -> Shape {
+        Shape {
+            kind: p[0] as u32,
+            v: Vec3::new(p[1], p[2], p[3]),
+            d: p[4],
+            w: Vec3::new(p[5], p[6], p[7]),
+            m: Vec3::new(p[8], p[9], p[10]),
+            mv: p[11],
+            r2: p[12],
+            x: p[13],
+            y: p[14],
+            small: p[15] != 0.0,
+            tan: p[16],
+            radius: p[17],
+            reach: p[18],
+        }
+    }
+}
+
 impl Shape {
     /// Depth along the ray `u`: the plane's, or the centre's distance
     /// where the ray misses the plane's front (mixed: the centre's).
