@@ -149,20 +149,29 @@ pub(crate) fn locate<V: Real>(
     let mean = light.radiance;
     let (raw, radiance) = if light.kind == MIXED {
         // Each facet's `A·max(0, −n̄·ω)` as a fraction of the node's area (at
-        // most 1, so `L·w` cannot overflow), and its radiance weighted by it.
-        let (mut area, mut power) = (zero, [zero; 3]);
-        for f in &light.cluster.facet {
+        // most 1, so `L·w` cannot overflow), and its radiance weighted by its
+        // share `w / Σw` of the projected area (a share, not `w`: `L·w`
+        // underflowed into subnormals for a dim facet a small part of a
+        // huge node, and the mean came out 0.05 % above the brightest).
+        let mut w = [zero; 3];
+        let mut area = zero;
+        for (w, f) in w.iter_mut().zip(&light.cluster.facet) {
             let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
-            let w = facing.max_of(zero);
-            area = area + w;
-            power = [
-                power[0] + V::splat(f[3]) * w,
-                power[1] + V::splat(f[4]) * w,
-                power[2] + V::splat(f[5]) * w,
-            ];
+            *w = facing.max_of(zero);
+            area = area + *w;
         }
         let some = zero.lt(area);
-        let ratio = |ch: usize, m: f32| V::select(some, power[ch] / area, V::splat(m));
+        let inv = V::splat(1.0) / V::select(some, area, V::splat(1.0));
+        let mut power = [zero; 3];
+        for (w, f) in w.iter().zip(&light.cluster.facet) {
+            let share = *w * inv;
+            power = [
+                power[0] + V::splat(f[3]) * share,
+                power[1] + V::splat(f[4]) * share,
+                power[2] + V::splat(f[5]) * share,
+            ];
+        }
+        let ratio = |ch: usize, m: f32| V::select(some, power[ch], V::splat(m));
         (
             s.area * area / d2,
             [ratio(0, mean.x), ratio(1, mean.y), ratio(2, mean.z)],
