@@ -161,10 +161,12 @@ pub(crate) fn locate<V: Real>(
             area = area + *w;
         }
         let some = zero.lt(area);
-        let inv = V::splat(1.0) / V::select(some, area, V::splat(1.0));
+        // A division per facet: `1/Σw` overflows for a subnormal `Σw`,
+        // and `0·∞` is NaN.
+        let total = V::select(some, area, V::splat(1.0));
         let mut power = [zero; 3];
         for (w, f) in w.iter().zip(&light.cluster.facet) {
-            let share = *w * inv;
+            let share = *w / total;
             power = [
                 power[0] + V::splat(f[3]) * share,
                 power[1] + V::splat(f[4]) * share,
