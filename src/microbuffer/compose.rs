@@ -124,13 +124,6 @@ fn mean(v: F32s) -> f32 {
 #[inline(always)]
 pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, radiance: bool) -> Composed {
     let (pixels, n) = (t.dir.len(), frags.len());
-    // Half the smallest sub-sample's angular size (chord): a footprint
-    // narrower than that covers one sub-sample at most.
-    let half_sample = t.pixel_size[..pixels]
-        .iter()
-        .copied()
-        .fold(f32::INFINITY, f32::min)
-        * 0.125;
     // One shape per splat (its fragments are consecutive).
     let mut shapes: Vec<Packed> = Vec::new();
     let mut shape_of = vec![0u32; n];
@@ -138,7 +131,7 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
     for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
         let node = (key & 0xFFFF_FFFF) as u32;
         if last != Some(node) {
-            let shape = Shape::of(tree, node, site.position, &site.frame, t.n, half_sample);
+            let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample);
             shapes.push(shape.pack());
             last = Some(node);
         }

@@ -261,11 +261,13 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
     let sp = F32s::splat;
     let zero = sp(0.0);
     let (ux, uy, uz) = (px.ux, px.uy, px.uz);
+    // The plane's hit distance along each sub-sample's ray (mixed: unused).
+    let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
+    let t = sp(s.mv) / denom;
+    let front = denom.simd_lt(zero) & zero.simd_lt(t);
     let member = if s.kind == LEAF {
-        let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
-        let t = sp(s.mv) / denom;
         let (ex, ey, ez) = (ux * t - sp(s.v.x), uy * t - sp(s.v.y), uz * t - sp(s.v.z));
-        denom.simd_lt(zero) & zero.simd_lt(t) & (ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2))
+        front & (ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2))
     } else {
         let (ex, ey, ez) = (ux - sp(s.w.x), uy - sp(s.w.y), uz - sp(s.w.z));
         (ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2))
@@ -282,9 +284,7 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
             far: sp(s.d + s.reach),
         };
     }
-    let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
-    let t = sp(s.mv) / denom;
-    let depth = F32s::select(denom.simd_lt(zero) & zero.simd_lt(t), t, sp(s.d));
+    let depth = F32s::select(front, t, sp(s.d));
     let slack = sp(s.slack(px.size, true));
     Lanes {
         cover,

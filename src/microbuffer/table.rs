@@ -108,6 +108,9 @@ pub(crate) struct Table {
     /// the sine of its angle from the normal: no pixel's ray leans further.
     pub(crate) lowest_z: f32,
     pub(crate) lowest_sin: f32,
+    /// Half the smallest sub-sample's angular size (a chord): a footprint
+    /// narrower than that covers one sub-sample at most (`samples`).
+    pub(crate) half_sample: f32,
     /// Per pixel the local directions (x, y, z by lane) of its 4×4
     /// sub-samples, the centres of a 4×4 grid over the pixel's square, row
     /// by row (`samples`).
@@ -162,6 +165,7 @@ impl Table {
         let reach_max = (stretch.iter().copied().fold(0.0, f64::max) * pixels_per_unit * 1.1) as f32;
         let mut pixel_size: Vec<f32> = solid_angle.iter().map(|w| w.sqrt()).collect();
         let pixel_angle = pixel_size.iter().copied().fold(0.0, f32::max);
+        let half_sample = pixel_size.iter().copied().fold(f32::INFINITY, f32::min) * 0.125;
         // Padded, so that a row of a 16-pixel tile loads in one piece
         // anywhere in the grid (lanes past the last pixel are outside every box).
         pixel_size.resize(len + LANES, 0.0);
@@ -193,6 +197,7 @@ impl Table {
             cos_weight,
             pixel_size,
             pixel_angle,
+            half_sample,
             reach,
             reach_max,
             lowest_z,
