@@ -14,7 +14,10 @@
 //! tile it about once, so a clamp at one would lose the overlaps and keep
 //! the gaps). Everything behind adds through `1 − κ·coverage` of the front
 //! layer (opaque at half coverage: a surface's splats leave gaps that would
-//! let light leak through). A pixel is the mean of its sub-samples.
+//! let light leak through), and not at all where a front splat's grown disk
+//! hides it (`samples`: fine sub-samples resolve the gaps between splats,
+//! where coverage alone let a light behind a slab through, more so as N
+//! grew). A pixel is the mean of its sub-samples.
 //!
 //! Why sub-samples: a pixel's fragments swept into layers by chaining
 //! overlapping `[d − R, d + R]` intervals merged a block's top with the lit
@@ -34,7 +37,7 @@ use super::fragments::Fragments;
 use super::samples::{Packed, Pixel, SAMPLES, Shape, lanes};
 use super::table::Table;
 use crate::environment::Environment;
-use crate::simd::{F32s, Real};
+use crate::simd::{F32s, M32s, Real};
 use crate::tree::Tree;
 
 /// How much of what lies behind the front layer it hides per unit of
@@ -164,7 +167,7 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         }
     }
     let zero = F32s::splat(0.0);
-    let mut seen: Vec<(F32s, F32s, u32)> = Vec::new();
+    let mut seen: Vec<(F32s, F32s, M32s, u32)> = Vec::new();
     for p in 0..pixels {
         let bucket = &mut sorted[start[p] as usize..start[p + 1] as usize];
         if bucket.is_empty() {
@@ -186,17 +189,20 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         for &(_, i) in bucket.iter() {
             let shape = Shape::unpack(&shapes[shape_of[i as usize] as usize]);
             let l = lanes(&shape, &px, frags.cover[i as usize]);
-            let nearer = zero.simd_lt(l.cover) & l.near.simd_lt(nearest);
+            let nearer = (zero.simd_lt(l.cover) | l.hide) & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);
             reach = F32s::select(nearer, l.far, reach);
-            seen.push((l.cover, l.near, i));
+            seen.push((l.cover, l.near, l.hide, i));
         }
         // The front layer (what reaches the nearest fragment's far depth),
-        // and what lies behind it.
+        // what it hides outright, and what lies behind it.
         let (mut front, mut behind) = (zero, zero);
         let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
-        for &(cover, near, i) in &seen {
-            let a = F32s::select(near.simd_le(reach), cover, zero);
+        let mut hidden = M32s::splat(false);
+        for &(cover, near, hide, i) in &seen {
+            let in_front = near.simd_le(reach);
+            hidden |= hide & in_front;
+            let a = F32s::select(in_front, cover, zero);
             let b = cover - a;
             front += a;
             behind += b;
@@ -208,7 +214,11 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
                 }
             }
         }
-        let through = (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero);
+        let through = F32s::select(
+            hidden,
+            zero,
+            (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero),
+        );
         out.cover[p] = mean(front + through * behind);
         if radiance {
             out.radiance[p] = Vec3::new(
