@@ -132,14 +132,49 @@ fn inside_a_uniform_sphere_irradiance_is_pi_l() {
     }
 }
 
+/// Form factor from a point at height 1 above a corner of an `a × b`
+/// rectangle parallel to its tangent plane.
+fn corner_form_factor(a: f64, b: f64) -> f64 {
+    let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+    (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
+}
+
 #[test]
-fn facing_a_large_plane_irradiance_is_pi_l() {
-    // A 40 × 40 square 0.5 away misses about (0.5/20)² of the cosine-weighted hemisphere.
-    let tree = square(40.0, 400);
-    let recs = Receiver::from_pairs([(Vec3::new(0.1, 0.2, 0.5), -Vec3::Z)]).unwrap();
-    let e = irradiance(&tree, &recs, 0.02, 16, Scheme::Hybrid, Isa::best())[0].x;
-    let expect = std::f32::consts::PI * L * (1.0 - 0.25 / (0.25 + 400.0));
-    assert!(rel(e, expect) < 0.005, "E = {e} vs {expect}"); // tolerance 0.5 % (measured 0.06 %)
+fn facing_a_square_irradiance_is_pi_l_times_its_form_factor() {
+    // A 2 × 2 square of coarse surfels (cell 0.1) 0.5 in front of the
+    // receiver: its nearest leaves are drawn as disks a pixel or two wide.
+    // Exact: πL times the four corner rectangles' form factors (F ≈ 0.82,
+    // so the cap at πL, which a square filling the hemisphere would read,
+    // plays no part). The disks' rim ramps once overstated them: +3.3 %
+    // at N 12 and 16 (mean of these receivers), +8 % at N 24; now −0.2 and
+    // −0.7 %. Above N 16 an erratic ±2 % is left (docs/exact/findings.md).
+    let (side, h) = (2.0f64, 0.5f64);
+    let tree = square(side as f32, 20);
+    let receivers: Vec<(f64, f64)> = (0..8)
+        .map(|i| {
+            let t = i as f64 * 0.618_034;
+            ((t.fract() - 0.5) * 0.4, ((t * 1.7).fract() - 0.5) * 0.4)
+        })
+        .collect();
+    for res in [12, 16] {
+        let mut errors = Vec::new();
+        for &(px, py) in &receivers {
+            let s = side / 2.0;
+            let f = corner_form_factor((s - px) / h, (s - py) / h)
+                + corner_form_factor((s - px) / h, (s + py) / h)
+                + corner_form_factor((s + px) / h, (s - py) / h)
+                + corner_form_factor((s + px) / h, (s + py) / h);
+            let recs = Receiver::from_pairs([(Vec3::new(px as f32, py as f32, h as f32), -Vec3::Z)]).unwrap();
+            let e = irradiance(&tree, &recs, 0.02, res, Scheme::Hybrid, Isa::best())[0].x as f64;
+            errors.push(e / (std::f64::consts::PI * L as f64 * f) - 1.0);
+        }
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+        assert!(
+            mean.abs() < 0.01 && rms < 0.01,
+            "N {res}: mean {mean:+.4}, rms {rms:.4}, {errors:?}"
+        );
+    }
 }
 
 #[test]

@@ -282,8 +282,9 @@ impl<V: Real> DiskPlan<V> {
     /// Whether the rays of directions `u` from the receiver (one pixel's, or
     /// sixteen in the lanes) hit the disk's front, at what distance, and the
     /// pixels' coverage: the disk's edge is a ramp one pixel (angular size
-    /// `delta`) wide at the hit distance, so a disk over a few pixels still
-    /// shows its true area on average.
+    /// `delta`) wide at the hit distance, centred where it integrates to the
+    /// disk's area, so a disk over a few pixels still shows its true area on
+    /// average.
     #[inline(always)]
     pub(super) fn hit(&self, ux: V, uy: V, uz: V, delta: V) -> (V::Mask, V, V) {
         let [mx, my, mz] = self.m;
@@ -293,7 +294,16 @@ impl<V: Real> DiskPlan<V> {
         let ey = uy * t - self.c[1];
         let ez = uz * t - self.c[2];
         let e = (ex * ex + ey * ey + ez * ez).sqrt();
-        let cover = (V::splat(0.5) + (self.r - e) / (delta * t)).min_of(V::splat(1.0));
+        // A ramp of width `w` centred on radius `a` integrates to
+        // `π(a² + w²/12)`: solved for the disk's area `πr²`, as the cone's
+        // is (the rim `r` itself overstated a disk of a pixel or two by up
+        // to 10 %: a square of coarse surfels in front of the receiver came
+        // out 8 % too bright at N 24).
+        let w = delta * t;
+        let a = (self.r * self.r - w * w * V::splat(1.0 / 12.0))
+            .max_of(V::splat(0.0))
+            .sqrt();
+        let cover = (V::splat(0.5) + (a - e) / w).min_of(V::splat(1.0));
         let zero = V::splat(0.0);
         (denom.lt(zero) & zero.lt(t) & zero.lt(cover), t, cover)
     }
