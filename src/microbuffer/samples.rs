@@ -263,69 +263,79 @@ pub(crate) struct Pixel {
 /// outline of two or three faces, hides none).
 #[inline(always)]
 pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
-    let one = || {
-        let sub = |at: f32, first: f32| ((at - first) * 4.0).floor().clamp(0.0, 3.0) as usize;
-        let k = sub(s.x, px.col) + 4 * sub(s.y, px.row);
-        // From its own depth to its plane's along the sub-sample's ray:
-        // the ray may cross a corner onto another surface, nearer than
-        // this splat's plane there, where the splat itself lies beside it.
-        let plane = s.depth(Vec3::new(px.ux[k], px.uy[k], px.uz[k]));
-        let slack = s.slack(px.size, true);
-        Lanes {
-            cover: F32s::select(
-                M32s::from_bitmask(1 << k),
-                F32s::splat(cover * SAMPLES as f32),
-                F32s::splat(0.0),
-            ),
-            near: F32s::splat(plane.min(s.d) - slack),
-            far: F32s::splat(plane.max(s.d) + slack),
-            hide: M32s::splat(false),
-        }
-    };
     if s.small {
-        return one();
+        return one(s, px, cover);
     }
     let sp = F32s::splat;
-    let zero = sp(0.0);
     let (ux, uy, uz) = (px.ux, px.uy, px.uz);
-    // The plane's hit distance along each sub-sample's ray (mixed: unused).
-    let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
-    let t = sp(s.mv) / denom;
-    let front = denom.simd_lt(zero) & zero.simd_lt(t);
-    let (member, hide) = if s.kind == MIXED {
-        let (ex, ey, ez) = (ux - sp(s.w.x), uy - sp(s.w.y), uz - sp(s.w.z));
-        (
-            (ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2)),
-            M32s::splat(false),
-        )
-    } else {
-        let (ex, ey, ez) = (ux * t - sp(s.v.x), uy * t - sp(s.v.y), uz * t - sp(s.v.z));
-        let e2 = ex * ex + ey * ey + ez * ez;
-        let grow = if s.kind == LEAF { HIDE_LEAF } else { HIDE_PLANAR };
-        (
-            front & e2.simd_le(sp(s.disk2)),
-            front & e2.simd_le(sp(s.disk2 * grow)),
-        )
-    };
-    let count = member.to_bitmask().count_ones();
-    if count == 0 {
-        return one();
-    }
-    let cover = F32s::select(member, sp(cover * (SAMPLES as f32 / count as f32)), zero);
     if s.kind == MIXED {
+        let (ex, ey, ez) = (ux - sp(s.w.x), uy - sp(s.w.y), uz - sp(s.w.z));
+        let Some(cover) = spread((ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2)), cover) else {
+            return one(s, px, cover);
+        };
         return Lanes {
             cover,
             near: sp(s.d - s.reach),
             far: sp(s.d + s.reach),
-            hide,
+            hide: M32s::splat(false),
         };
     }
+    // The plane's hit distance along each sub-sample's ray.
+    let zero = sp(0.0);
+    let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
+    let t = sp(s.mv) / denom;
+    let front = denom.simd_lt(zero) & zero.simd_lt(t);
+    let (ex, ey, ez) = (ux * t - sp(s.v.x), uy * t - sp(s.v.y), uz * t - sp(s.v.z));
+    let e2 = ex * ex + ey * ey + ez * ez;
+    let Some(cover) = spread(front & e2.simd_le(sp(s.disk2)), cover) else {
+        return one(s, px, cover);
+    };
+    let grow = if s.kind == LEAF { HIDE_LEAF } else { HIDE_PLANAR };
     let depth = F32s::select(front, t, sp(s.d));
     let slack = sp(s.slack(px.size, true));
     Lanes {
         cover,
         near: depth - slack,
         far: depth + slack,
-        hide,
+        hide: front & e2.simd_le(sp(s.disk2 * grow)),
     }
+}
+
+/// The whole fragment at one sub-sample: the one its centre's map position
+/// falls in, or the nearest one in this pixel.
+#[inline(always)]
+fn one(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
+    let col = ((s.x - px.col) * 4.0).floor().clamp(0.0, 3.0) as usize;
+    let row = ((s.y - px.row) * 4.0).floor().clamp(0.0, 3.0) as usize;
+    let k = col + 4 * row;
+    // From its own depth to its plane's along the sub-sample's ray:
+    // the ray may cross a corner onto another surface, nearer than
+    // this splat's plane there, where the splat itself lies beside it.
+    let plane = s.depth(Vec3::new(px.ux[k], px.uy[k], px.uz[k]));
+    let slack = s.slack(px.size, true);
+    Lanes {
+        cover: F32s::select(
+            M32s::from_bitmask(1 << k),
+            F32s::splat(cover * SAMPLES as f32),
+            F32s::splat(0.0),
+        ),
+        near: F32s::splat(plane.min(s.d) - slack),
+        far: F32s::splat(plane.max(s.d) + slack),
+        hide: M32s::splat(false),
+    }
+}
+
+/// Coverage `cover` spread evenly over the sub-samples in `member` (they
+/// average to it); `None` where there are none.
+#[inline(always)]
+fn spread(member: M32s, cover: f32) -> Option<F32s> {
+    let count = member.to_bitmask().count_ones();
+    if count == 0 {
+        return None;
+    }
+    Some(F32s::select(
+        member,
+        F32s::splat(cover * (SAMPLES as f32 / count as f32)),
+        F32s::splat(0.0),
+    ))
 }
