@@ -153,14 +153,14 @@ fn each_kind_of_damage_has_its_error() {
     assert!(matches!(load(&b), TreeFileError::BadMagic { .. }));
 
     let mut b = good.clone();
-    b[8] = 2;
+    b[8] = 1;
     let e = load(&b);
     assert!(
         matches!(
             e,
             TreeFileError::UnsupportedVersion {
-                found: 2,
-                supported: 1
+                found: 1,
+                supported: 2
             }
         ),
         "{e}"

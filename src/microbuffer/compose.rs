@@ -7,8 +7,9 @@
 //! 4×4 sub-samples, one per lane (`samples`): each fragment's coverage is
 //! spread over the sub-samples its footprint covers, with a depth interval
 //! at each (the node's plane along the sub-sample's ray, widened by how far
-//! the footprint's placement may be off; `±R` for a cluster that faces
-//! several ways). At each sub-sample the *front layer* is every fragment
+//! the footprint's placement may be off; a cluster that faces several ways
+//! shows each facet's disk on its plane, or, curved, a cone `±R` deep).
+//! At each sub-sample the *front layer* is every fragment
 //! whose interval reaches the nearest fragment's: one surface, seen through
 //! several splats, whose coverage adds unclamped (the disks of a surface
 //! tile it about once, so a clamp at one would lose the overlaps and keep
@@ -34,11 +35,11 @@ use glam::Vec3;
 use std::simd::prelude::*;
 
 use super::fragments::Fragments;
-use super::samples::{Packed, Pixel, SAMPLES, Shape, lanes};
+use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, faceted, facets, lanes};
 use super::table::Table;
 use crate::environment::Environment;
 use crate::simd::{F32s, M32s, Real};
-use crate::tree::Tree;
+use crate::tree::{MIXED, Tree};
 
 /// How much of what lies behind the front layer it hides per unit of
 /// coverage.
@@ -129,12 +130,19 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
     let (pixels, n) = (t.dir.len(), frags.len());
     // One shape per splat (its fragments are consecutive).
     let mut shapes: Vec<Packed> = Vec::new();
+    let mut mixed: Vec<Facets> = Vec::new();
     let mut shape_of = vec![0u32; n];
     let mut last = None;
     for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
         let node = (key & 0xFFFF_FFFF) as u32;
         if last != Some(node) {
-            let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample);
+            let index = if tree.splat[node as usize].kind == MIXED && faceted(tree, node) {
+                mixed.push(facets(tree, node, site.position, &site.frame));
+                mixed.len() as u32 - 1
+            } else {
+                u32::MAX
+            };
+            let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample, index);
             shapes.push(shape.pack());
             last = Some(node);
         }
@@ -188,7 +196,7 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
         for &(_, i) in bucket.iter() {
             let shape = Shape::unpack(&shapes[shape_of[i as usize] as usize]);
-            let l = lanes(&shape, &px, frags.cover[i as usize]);
+            let l = lanes(&shape, &px, frags.cover[i as usize], &mixed);
             let nearer = (zero.simd_lt(l.cover) | l.hide) & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);
             reach = F32s::select(nearer, l.far, reach);

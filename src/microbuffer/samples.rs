@@ -8,7 +8,7 @@ use std::simd::prelude::*;
 use glam::Vec3;
 
 use crate::simd::{F32s, LANES, M32s, Real};
-use crate::tree::{LEAF, MIXED, NodeId, Tree, field};
+use crate::tree::{FACETS, LEAF, MIXED, NodeId, Tree, field};
 
 /// Sub-samples per pixel: a 4×4 grid, one per lane.
 pub(crate) const SAMPLES: usize = LANES;
@@ -53,7 +53,8 @@ pub(crate) struct Shape {
     m: Vec3,
     mv: f32,
     /// Leaf: the disk's radius². Cluster: the chord radius² of the cone of
-    /// its projected solid angle (mixed: of its whole area).
+    /// its projected solid angle (mixed: of its whole area; its cone is
+    /// drawn only where its facets are not flat).
     r2: f32,
     /// The radius² `A/π` of the disk of the node's area (leaves and planar
     /// clusters: their footprint is that disk on their plane, an ellipse as
@@ -75,6 +76,81 @@ pub(crate) struct Shape {
     /// half-angle: how far a planar cluster's surfels may leave its plane);
     /// for a mixed cluster, its bounding radius `R`.
     reach: f32,
+    /// A mixed cluster's index in the receiver's [`Facets`] (`u32::MAX`:
+    /// drawn as its cone).
+    facets: u32,
+}
+
+/// Floats per facet in [`Facets`].
+const FACET: usize = 11;
+
+/// A mixed cluster's facets as one receiver sees them, `FACET` floats
+/// each: the plane's unit normal (local frame), `m·v`, the centroid `v`
+/// (local), the radius² `A/π` of the disk of its area (0: no facet), the
+/// centroid's distance, `tanθ` (as [`Shape`]'s) and its reach.
+pub(crate) type Facets = [f32; FACETS * FACET];
+
+/// How much of a mixed node's area its facets must show face-on
+/// (`Σ|A·n̄| / A`) to be drawn as flat pieces: a box's corner shows all
+/// of it; a column's or an arch's cluster, whose facets are curved (or
+/// hold the normals a fourth facet would have had), shows less, and its
+/// disks would leave gaps where its surface is.
+const FLAT: f32 = 0.9;
+
+/// Whether mixed node `node` is drawn as its facets' disks (else as one
+/// round cone at its centre, `±R` deep).
+#[inline(always)]
+pub(crate) fn faceted(tree: &Tree, node: NodeId) -> bool {
+    let cluster = &tree.cluster[tree.facets_of[node as usize] as usize];
+    let mut shown = 0.0;
+    for f in &cluster.facet {
+        shown += Vec3::new(f[0], f[1], f[2]).length();
+    }
+    shown >= FLAT
+}
+
+/// The facets of mixed node `node` seen from `position` with local frame
+/// `frame` (`Tree::cluster`, `plane`).
+#[inline(always)]
+pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3]) -> Facets {
+    let rec = &tree.splat[node as usize];
+    let cluster = &tree.cluster[tree.facets_of[node as usize] as usize];
+    let r = tree.bounding_radius(node);
+    let centre = Vec3::from_array(rec.center);
+    let mut out = [0.0; FACETS * FACET];
+    for ((f, p), o) in cluster
+        .facet
+        .iter()
+        .zip(&cluster.plane)
+        .zip(out.chunks_exact_mut(FACET))
+    {
+        let an = Vec3::new(f[0], f[1], f[2]);
+        let n = an.normalize_or_zero();
+        let m = Vec3::new(n.dot(frame[0]), n.dot(frame[1]), n.dot(frame[2]));
+        let x = centre + Vec3::new(p[0], p[1], p[2]) * r - position;
+        let v = Vec3::new(x.dot(frame[0]), x.dot(frame[1]), x.dot(frame[2]));
+        let d = v.length();
+        let c = if d > 0.0 {
+            (m.dot(v) / d).abs().max(1e-3)
+        } else {
+            1.0
+        };
+        let area = rec.area * an.length();
+        o.copy_from_slice(&[
+            m.x,
+            m.y,
+            m.z,
+            m.dot(v),
+            v.x,
+            v.y,
+            v.z,
+            area * std::f32::consts::FRAC_1_PI,
+            d,
+            (1.0 - c * c).max(0.0).sqrt() / c,
+            p[3] * r,
+        ]);
+    }
+    out
 }
 
 impl Shape {
@@ -87,6 +163,7 @@ impl Shape {
         frame: &[Vec3; 3],
         res: usize,
         half_sample: f32,
+        facets: u32,
     ) -> Shape {
         let rec = &tree.splat[node as usize];
         let r = tree.bounding_radius(node);
@@ -136,6 +213,7 @@ impl Shape {
             } else {
                 r * tree.nodes.get(node, field::SIN)
             },
+            facets,
         }
     }
 }
@@ -143,7 +221,7 @@ impl Shape {
 /// A [`Shape`] as plain floats, for storage: a `Vec` of the crate's own
 /// type would grow through code compiled for the baseline target, outside
 /// the kernel's clone (`scripts/check-asm.sh`).
-pub(crate) type Packed = [f32; 20];
+pub(crate) type Packed = [f32; 21];
 
 impl Shape {
     /// The shape as plain floats.
@@ -170,6 +248,7 @@ impl Shape {
             self.radius,
             self.reach,
             self.disk2,
+            f32::from_bits(self.facets),
         ]
     }
 
@@ -191,6 +270,7 @@ impl Shape {
             radius: p[17],
             reach: p[18],
             disk2: p[19],
+            facets: p[20].to_bits(),
         }
     }
 }
@@ -252,23 +332,25 @@ pub(crate) struct Pixel {
 /// Fragment of coverage `cover` of shape `s` at the sub-samples of `px`.
 ///
 /// Which sub-samples: the disk of its area on its plane (leaves and planar
-/// clusters: the ray–disk hits), or a mixed cluster's cone; where none is
-/// inside, or the footprint is narrower than half the smallest sub-sample
-/// (so that it covers one at most), the one its centre's map position falls
-/// in, or the nearest one in this pixel (a small splat's neighbouring
-/// pixels). Depth: along each sub-sample's ray, the node's plane (leaves
-/// and planar clusters) or its centre's distance (mixed clusters, whose
-/// interval is `±R`). Hidden behind it: the sub-samples in its disk grown
-/// `HIDE_LEAF` / `HIDE_PLANAR` times (a mixed cluster's cone, a rough
-/// outline of two or three faces, hides none).
+/// clusters: the ray–disk hits), the disks of a mixed cluster's facets on
+/// theirs, or, for a mixed cluster whose facets are not flat
+/// ([`faceted`]), its cone; where none is inside, or the footprint is
+/// narrower than half the smallest sub-sample (so that it covers one at
+/// most), the one its centre's map position falls in, or the nearest one
+/// in this pixel (a small splat's neighbouring pixels). Depth: along each
+/// sub-sample's ray, the plane (of the nearest facet hit) or the centre's
+/// distance (a cone, whose interval is `±R`). Hidden behind it: the
+/// sub-samples in its disks grown `HIDE_LEAF` / `HIDE_PLANAR` times (a
+/// cone, a rough outline of curved faces, hides none).
 #[inline(always)]
-pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
+pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32, facets: &[Facets]) -> Lanes {
     if s.small {
         return one(s, px, cover);
     }
     let sp = F32s::splat;
     let (ux, uy, uz) = (px.ux, px.uy, px.uz);
-    if s.kind == MIXED {
+    let zero = sp(0.0);
+    if s.kind == MIXED && s.facets == u32::MAX {
         let (ex, ey, ez) = (ux - sp(s.w.x), uy - sp(s.w.y), uz - sp(s.w.z));
         let Some(cover) = spread((ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2)), cover) else {
             return one(s, px, cover);
@@ -280,8 +362,39 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
             hide: M32s::splat(false),
         };
     }
+    if s.kind == MIXED {
+        // Each facet as a planar cluster: the disk of its area on its
+        // plane; the depth interval of the nearest facet hit.
+        let (mut member, mut hide) = (M32s::splat(false), M32s::splat(false));
+        let (mut near, mut far) = (sp(f32::INFINITY), sp(f32::NEG_INFINITY));
+        for g in facets[s.facets as usize].chunks_exact(FACET) {
+            if g[7] == 0.0 {
+                continue;
+            }
+            let denom = sp(g[0]) * ux + sp(g[1]) * uy + sp(g[2]) * uz;
+            let t = sp(g[3]) / denom;
+            let front = denom.simd_lt(zero) & zero.simd_lt(t);
+            let (ex, ey, ez) = (ux * t - sp(g[4]), uy * t - sp(g[5]), uz * t - sp(g[6]));
+            let e2 = ex * ex + ey * ey + ez * ez;
+            member |= front & e2.simd_le(sp(g[7]));
+            let hit = front & e2.simd_le(sp(g[7] * HIDE_PLANAR));
+            hide |= hit;
+            let spread = (g[8] * px.size * g[9]).min(s.radius);
+            let slack = spread * PLACEMENT + g[8] * ROUNDING + g[10];
+            near = F32s::select(hit, (t - sp(slack)).simd_min(near), near);
+            far = F32s::select(hit, (t + sp(slack)).simd_max(far), far);
+        }
+        let Some(cover) = spread(member, cover) else {
+            return one(s, px, cover);
+        };
+        return Lanes {
+            cover,
+            near,
+            far,
+            hide,
+        };
+    }
     // The plane's hit distance along each sub-sample's ray.
-    let zero = sp(0.0);
     let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
     let t = sp(s.mv) / denom;
     let front = denom.simd_lt(zero) & zero.simd_lt(t);

@@ -64,11 +64,18 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
         let bad = c.facet.iter().any(|f| {
             let (an, l) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
             !(an.is_finite() && an.length() <= UNIT && l.is_finite() && l.min_element() >= 0.0)
+        }) || c.plane.iter().any(|p| {
+            // The centroid lies in the sphere; a disk leaves its facet's
+            // plane by at most the sphere's diameter plus its own radius.
+            let off = Vec3::new(p[0], p[1], p[2]);
+            !(off.is_finite() && off.length() <= UNIT && (0.0..=3.0 * UNIT).contains(&p[3]))
         });
         if bad {
             return Err(Fault {
                 place: Place::Cluster(i),
-                what: format!("cluster {i}: a facet's normal or radiance is out of range ({FACETS} facets)"),
+                what: format!(
+                    "cluster {i}: a facet's normal, radiance or plane is out of range ({FACETS} facets)"
+                ),
             });
         }
     }

@@ -12,7 +12,7 @@
 //! | 52 | 12 | counts: surfels `n`, clusters (facets of the mixed nodes), tree depth (u32 each) |
 //! | 64 | 40 n | surfels: position, normal, radius, radiance |
 //! | | 72 (2n − 1) | nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance |
-//! | | 72 per cluster | facets: 3 × (area-weighted normal, radiance) |
+//! | | 120 per cluster | facets: 3 × (area-weighted normal, radiance), then 3 × (centroid offset, reach), in units of the node's radius |
 //! | end − 8 | 8 | FNV-1a 64 of every byte before it |
 //!
 //! A reader checks, in this order, the magic, the version, the counts
@@ -34,12 +34,12 @@ use crate::points::{PointCloud, Surfel};
 /// The first eight bytes of a tree file.
 pub const MAGIC: [u8; 8] = *b"PBGITREE";
 /// The format version this library reads and writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 const HEADER: usize = 64;
 const SURFEL: usize = 40;
 const NODE: usize = 72;
-const CLUSTER: usize = 72;
+const CLUSTER: usize = 120;
 const CHECKSUM: usize = 8;
 const AO: u32 = 1;
 const GATHERED: u32 = 2;
@@ -313,6 +313,7 @@ impl TreeFile {
         }
         for c in &tree.cluster {
             c.facet.iter().flatten().for_each(|&x| put_f32(&mut out, x));
+            c.plane.iter().flatten().for_each(|&x| put_f32(&mut out, x));
         }
         let sum = checksum(&out);
         put_u64(&mut out, sum);
@@ -479,7 +480,7 @@ impl TreeFile {
             ));
         }
         for c in tree.cluster.iter_mut() {
-            for x in c.facet.iter_mut().flatten() {
+            for x in c.facet.iter_mut().flatten().chain(c.plane.iter_mut().flatten()) {
                 *x = rd.f32();
             }
         }

@@ -150,12 +150,21 @@ pub(crate) struct Cluster {
     /// fraction of the node's area, so at most 1 in length and free of the
     /// scene's scale), then its mean radiance `P/A` (r, g, b).
     pub facet: [[f32; 6]; FACETS],
+    /// Per facet, where it lies, in units of the node's bounding radius `R`:
+    /// its area-weighted centroid less the node's centre (x, y, z: at most 1
+    /// in length), then how far its surfels' disks leave the plane through
+    /// that centroid along its mean normal. The microbuffer shows each facet
+    /// as the disk of its area on that plane (its outline and its depth),
+    /// where one round cone at the centre, `±R` deep, merged a box's top with
+    /// the floor behind it and let the light behind its edges through.
+    pub plane: [[f32; 4]; FACETS],
 }
 
 impl Cluster {
     /// No light in any direction (what a node that is not [`MIXED`] reads).
     pub(crate) const NONE: Cluster = Cluster {
         facet: [[0.0; 6]; FACETS],
+        plane: [[0.0; 4]; FACETS],
     };
 }
 
@@ -492,8 +501,9 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
     let mut area = 0.0f64;
     let mut normal = DVec3::ZERO;
     let mut radiance = DVec3::ZERO;
-    // Facets: first normal, Σ A·n, Σ A·L, Σ A.
-    let mut facets: Vec<(DVec3, DVec3, DVec3, f64)> = Vec::with_capacity(FACETS);
+    // Facets: first normal, Σ A·n, Σ A·L, Σ A, Σ A·p; and each surfel's.
+    let mut facets: Vec<(DVec3, DVec3, DVec3, f64, DVec3)> = Vec::with_capacity(FACETS);
+    let mut facet_of: Vec<u8> = Vec::with_capacity(order.len());
     for &i in order {
         let s = &surfels[i as usize];
         radius = radius.max(s.position.as_dvec3().distance(c) + s.radius as f64);
@@ -506,13 +516,28 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
         let k = match nearest {
             Some(k) if facets[k].0.dot(n) >= FACET_COS || facets.len() == FACETS => k,
             _ => {
-                facets.push((n, DVec3::ZERO, DVec3::ZERO, 0.0));
+                facets.push((n, DVec3::ZERO, DVec3::ZERO, 0.0, DVec3::ZERO));
                 facets.len() - 1
             }
         };
         facets[k].1 += n * a;
         facets[k].2 += l * a;
         facets[k].3 += a;
+        facets[k].4 += s.position.as_dvec3() * a;
+        facet_of.push(k as u8);
+    }
+    // Each facet's plane: its centroid, mean normal and how far its disks
+    // leave that plane (a disk tilted by θ from it by `r·sinθ` at its rim).
+    let mut planes = [(DVec3::ZERO, DVec3::ZERO, 0.0f64); FACETS];
+    for (plane, f) in planes.iter_mut().zip(&facets) {
+        *plane = (f.4 / f.3, f.1.normalize_or_zero(), 0.0);
+    }
+    for (&i, &k) in order.iter().zip(&facet_of) {
+        let s = &surfels[i as usize];
+        let (c, m, reach) = &mut planes[k as usize];
+        let n = s.normal.as_dvec3().normalize_or_zero();
+        let tilt = (1.0 - m.dot(n).powi(2)).max(0.0).sqrt();
+        *reach = reach.max(m.dot(s.position.as_dvec3() - *c).abs() + s.radius as f64 * tilt);
     }
     // The cone's axis is the area-weighted normal direction; its half-angle the
     // widest normal from it. Both are scale-free.
@@ -550,10 +575,17 @@ fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNod
         // times `MAX_RADIANCE` stays finite however large the node.
         cluster: {
             let mut cluster = Cluster::NONE;
-            for (f, (_, an, p, a)) in cluster.facet.iter_mut().zip(&facets) {
+            for (f, (_, an, p, a, _)) in cluster.facet.iter_mut().zip(&facets) {
                 let an = (*an / area).as_vec3();
                 let l = (*p / *a).as_vec3();
                 *f = [an.x, an.y, an.z, l.x, l.y, l.z];
+            }
+            // In units of `R` (scale-free, like the weights above); a facet
+            // of one point has `R` 0 and nothing to place.
+            let unit = if radius > 0.0 { 1.0 / radius32 as f64 } else { 0.0 };
+            for (f, (p, _, reach)) in cluster.plane.iter_mut().zip(&planes[..facets.len()]) {
+                let off = ((*p - c) * unit).as_vec3();
+                *f = [off.x, off.y, off.z, round_up(reach * unit)];
             }
             cluster
         },
