@@ -135,7 +135,13 @@ pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3
         } else {
             1.0
         };
-        let area = rec.area * an.length();
+        // Seen from behind its plane it is hit on no sub-sample's front:
+        // no disk to test.
+        let area = if m.dot(v) < 0.0 {
+            rec.area * an.length()
+        } else {
+            0.0
+        };
         o.copy_from_slice(&[
             m.x,
             m.y,
