@@ -157,24 +157,38 @@ fn facing_a_square_irradiance_is_pi_l_times_its_form_factor() {
         })
         .collect();
     for res in [12, 16] {
-        let mut errors = Vec::new();
-        for &(px, py) in &receivers {
-            let s = side / 2.0;
-            let f = corner_form_factor((s - px) / h, (s - py) / h)
+        let s = side / 2.0;
+        within_one_percent(&tree, &receivers, h, res, |px, py| {
+            corner_form_factor((s - px) / h, (s - py) / h)
                 + corner_form_factor((s - px) / h, (s + py) / h)
                 + corner_form_factor((s + px) / h, (s - py) / h)
-                + corner_form_factor((s + px) / h, (s + py) / h);
-            let recs = Receiver::from_pairs([(Vec3::new(px as f32, py as f32, h as f32), -Vec3::Z)]).unwrap();
-            let e = irradiance(&tree, &recs, 0.02, res, Scheme::Hybrid, Isa::best())[0].x as f64;
-            errors.push(e / (std::f64::consts::PI * L as f64 * f) - 1.0);
-        }
-        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-        let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
-        assert!(
-            mean.abs() < 0.01 && rms < 0.01,
-            "N {res}: mean {mean:+.4}, rms {rms:.4}, {errors:?}"
-        );
+                + corner_form_factor((s + px) / h, (s + py) / h)
+        });
     }
+}
+
+/// Asserts that the irradiance at receivers `(x, y, h)` facing −z, at
+/// Ω 0.02 and resolution `res`, is `πL` times `form_factor(x, y)` within
+/// 1 %, in the mean and RMS over them.
+fn within_one_percent(
+    tree: &Tree,
+    receivers: &[(f64, f64)],
+    h: f64,
+    res: usize,
+    form_factor: impl Fn(f64, f64) -> f64,
+) {
+    let mut errors = Vec::new();
+    for &(px, py) in receivers {
+        let recs = Receiver::from_pairs([(Vec3::new(px as f32, py as f32, h as f32), -Vec3::Z)]).unwrap();
+        let e = irradiance(tree, &recs, 0.02, res, Scheme::Hybrid, Isa::best())[0].x as f64;
+        errors.push(e / (std::f64::consts::PI * L as f64 * form_factor(px, py)) - 1.0);
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    assert!(
+        mean.abs() < 0.01 && rms < 0.01,
+        "N {res}: mean {mean:+.4}, rms {rms:.4}, {errors:?}"
+    );
 }
 
 /// Surfels on a grid of cells `cell` over the rectangle `origin + [0, 1]²`
@@ -260,22 +274,12 @@ fn a_dark_box_in_front_of_a_lit_square_hides_it_at_every_resolution() {
         })
         .collect();
     for res in [48, 96] {
-        let mut errors = Vec::new();
-        for &(px, py) in &receivers {
+        within_one_percent(&tree, &receivers, h, res, |px, py| {
             let (p, n) = ([px, py, h], [0.0, 0.0, -1.0]);
-            let f = polygon_form_factor(&square, p, n)
+            polygon_form_factor(&square, p, n)
                 - polygon_form_factor(&lid, p, n)
-                - polygon_form_factor(&flank, p, n);
-            let recs = Receiver::from_pairs([(Vec3::new(px as f32, py as f32, h as f32), -Vec3::Z)]).unwrap();
-            let e = irradiance(&tree, &recs, 0.02, res, Scheme::Hybrid, Isa::best())[0].x as f64;
-            errors.push(e / (std::f64::consts::PI * L as f64 * f) - 1.0);
-        }
-        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-        let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
-        assert!(
-            mean.abs() < 0.01 && rms < 0.01,
-            "N {res}: mean {mean:+.4}, rms {rms:.4}, {errors:?}"
-        );
+                - polygon_form_factor(&flank, p, n)
+        });
     }
 }
 
