@@ -1,0 +1,127 @@
+//! A node's bounds and aggregates from its surfels: the bounding sphere,
+//! the normal cone, the mean normal and radiance, and the facets (by
+//! normal, each with its light and its plane), all in `f64`, rounded
+//! outward where the node test reads them.
+
+use glam::{DVec3, Vec3};
+
+use super::{BuildNode, Cluster, FACETS};
+use crate::points::Surfel;
+
+/// A surfel joins the facet whose first normal is nearest if within this
+/// cosine (about 18°), else starts a facet while there are fewer than three.
+const FACET_COS: f64 = 0.95;
+
+/// Bounding sphere, normal cone and aggregates of the surfels in `order`.
+pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNode {
+    // Centre of the position box: exact in f64, so homogeneous in the scale.
+    let center = (lo.as_dvec3() + hi.as_dvec3()) * 0.5;
+    let center32 = center.as_vec3();
+    let c = center32.as_dvec3();
+    let mut radius = 0.0f64;
+    let mut area = 0.0f64;
+    let mut normal = DVec3::ZERO;
+    let mut radiance = DVec3::ZERO;
+    // Facets: first normal, Σ A·n, Σ A·L, Σ A, Σ A·p; and each surfel's.
+    let mut facets: Vec<(DVec3, DVec3, DVec3, f64, DVec3)> = Vec::with_capacity(FACETS);
+    let mut facet_of: Vec<u8> = Vec::with_capacity(order.len());
+    for &i in order {
+        let s = &surfels[i as usize];
+        radius = radius.max(s.position.as_dvec3().distance(c) + s.radius as f64);
+        let a = (s.radius as f64) * (s.radius as f64);
+        area += a;
+        let (n, l) = (s.normal.as_dvec3(), s.radiance.as_dvec3());
+        normal += n * a;
+        radiance += l * a;
+        let nearest = (0..facets.len()).max_by(|&x, &y| facets[x].0.dot(n).total_cmp(&facets[y].0.dot(n)));
+        let k = match nearest {
+            Some(k) if facets[k].0.dot(n) >= FACET_COS || facets.len() == FACETS => k,
+            _ => {
+                facets.push((n, DVec3::ZERO, DVec3::ZERO, 0.0, DVec3::ZERO));
+                facets.len() - 1
+            }
+        };
+        facets[k].1 += n * a;
+        facets[k].2 += l * a;
+        facets[k].3 += a;
+        facets[k].4 += s.position.as_dvec3() * a;
+        facet_of.push(k as u8);
+    }
+    // Each facet's plane: its centroid, mean normal and how far its disks
+    // leave that plane (a disk tilted by θ from it by `r·sinθ` at its rim).
+    let mut planes = [(DVec3::ZERO, DVec3::ZERO, 0.0f64); FACETS];
+    for (plane, f) in planes.iter_mut().zip(&facets) {
+        *plane = (f.4 / f.3, f.1.normalize_or_zero(), 0.0);
+    }
+    for (&i, &k) in order.iter().zip(&facet_of) {
+        let s = &surfels[i as usize];
+        let (c, m, reach) = &mut planes[k as usize];
+        let n = s.normal.as_dvec3().normalize_or_zero();
+        let tilt = (1.0 - m.dot(n).powi(2)).max(0.0).sqrt();
+        *reach = reach.max(m.dot(s.position.as_dvec3() - *c).abs() + s.radius as f64 * tilt);
+    }
+    // The cone's axis is the area-weighted normal direction; its half-angle the
+    // widest normal from it. Both are scale-free.
+    let axis = normal.normalize_or_zero();
+    let mut cos_min = if axis == DVec3::ZERO { -1.0 } else { 1.0f64 };
+    if cos_min > 0.0 {
+        for &i in order {
+            let n = surfels[i as usize].normal.as_dvec3();
+            cos_min = cos_min.min(axis.dot(n / n.length()));
+        }
+    }
+    // Slack for rounding in the node test; cones past a hemisphere never cull.
+    let cos_min = cos_min - 1e-6;
+    let (cos, sin) = if cos_min <= 0.0 {
+        (0.0f32, 1.0f32)
+    } else {
+        let sin = (1.0 - cos_min * cos_min).max(0.0).sqrt();
+        (round_down(cos_min), round_up(sin).min(1.0))
+    };
+    let radius32 = round_up(radius * (1.0 + 1e-6));
+    let pi_area = std::f64::consts::PI * area;
+    BuildNode {
+        center: center32.to_array(),
+        radius: radius32,
+        axis: axis.as_vec3().to_array(),
+        cos,
+        sin,
+        child: 0,
+        // Saturates: radii up to `MAX_COORDINATE` can make `π Σ r²` overflow f32.
+        area: (pi_area as f32).min(f32::MAX),
+        normal: (normal / area).as_vec3(),
+        radiance: (radiance / area).as_vec3(),
+        facets: facets.len() as u32,
+        // Fractions of the node's area: `|A·n̄| ≤ A`, so a facet's weight
+        // times `MAX_RADIANCE` stays finite however large the node.
+        cluster: {
+            let mut cluster = Cluster::NONE;
+            for (f, (_, an, p, a, _)) in cluster.facet.iter_mut().zip(&facets) {
+                let an = (*an / area).as_vec3();
+                let l = (*p / *a).as_vec3();
+                *f = [an.x, an.y, an.z, l.x, l.y, l.z];
+            }
+            // In units of `R` (scale-free, like the weights above); a facet
+            // of one point has `R` 0 and nothing to place.
+            let unit = if radius > 0.0 { 1.0 / radius32 as f64 } else { 0.0 };
+            for (f, (p, _, reach)) in cluster.plane.iter_mut().zip(&planes[..facets.len()]) {
+                let off = ((*p - c) * unit).as_vec3();
+                *f = [off.x, off.y, off.z, round_up(reach * unit)];
+            }
+            cluster
+        },
+        depth: 0,
+    }
+}
+
+/// Smallest f32 ≥ `x`.
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
+/// Largest f32 ≤ `x`.
+fn round_down(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x { f.next_down() } else { f }
+}
