@@ -35,11 +35,11 @@ use glam::Vec3;
 use std::simd::prelude::*;
 
 use super::fragments::Fragments;
-use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, faceted, facets, lanes};
+use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, lanes};
 use super::table::Table;
 use crate::environment::Environment;
 use crate::simd::{F32s, M32s, Real};
-use crate::tree::{MIXED, Tree};
+use crate::tree::Tree;
 
 /// How much of what lies behind the front layer it hides per unit of
 /// coverage.
@@ -136,11 +136,12 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
     for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
         let node = (key & 0xFFFF_FFFF) as u32;
         if last != Some(node) {
-            let index = if tree.splat[node as usize].kind == MIXED && faceted(tree, node) {
-                mixed.push(facets(tree, node, site.position, &site.frame));
-                mixed.len() as u32 - 1
-            } else {
-                u32::MAX
+            let index = match facets(tree, node, site.position, &site.frame) {
+                Some(f) => {
+                    mixed.push(f);
+                    mixed.len() as u32 - 1
+                }
+                None => u32::MAX,
             };
             let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample, index);
             shapes.push(shape.pack());

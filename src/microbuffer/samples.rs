@@ -97,24 +97,23 @@ pub(crate) type Facets = [f32; FACETS * FACET];
 /// disks would leave gaps where its surface is.
 const FLAT: f32 = 0.9;
 
-/// Whether mixed node `node` is drawn as its facets' disks (else as one
-/// round cone at its centre, `±R` deep).
+/// The facets of node `node` seen from `position` with local frame `frame`
+/// (`Tree::cluster`, `plane`), if it is drawn as them: a mixed node whose
+/// facets are flat (else it is one round cone at its centre, `±R` deep).
 #[inline(always)]
-pub(crate) fn faceted(tree: &Tree, node: NodeId) -> bool {
+pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3]) -> Option<Facets> {
+    let rec = &tree.splat[node as usize];
+    if rec.kind != MIXED {
+        return None;
+    }
     let cluster = &tree.cluster[tree.facets_of[node as usize] as usize];
     let mut shown = 0.0;
     for f in &cluster.facet {
         shown += Vec3::new(f[0], f[1], f[2]).length();
     }
-    shown >= FLAT
-}
-
-/// The facets of mixed node `node` seen from `position` with local frame
-/// `frame` (`Tree::cluster`, `plane`).
-#[inline(always)]
-pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3]) -> Facets {
-    let rec = &tree.splat[node as usize];
-    let cluster = &tree.cluster[tree.facets_of[node as usize] as usize];
+    if shown < FLAT {
+        return None;
+    }
     let r = tree.bounding_radius(node);
     let centre = Vec3::from_array(rec.center);
     let mut out = [0.0; FACETS * FACET];
@@ -129,24 +128,16 @@ pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3
         let m = Vec3::new(n.dot(frame[0]), n.dot(frame[1]), n.dot(frame[2]));
         let x = centre + Vec3::new(p[0], p[1], p[2]) * r - position;
         let v = Vec3::new(x.dot(frame[0]), x.dot(frame[1]), x.dot(frame[2]));
-        let d = v.length();
-        let c = if d > 0.0 {
-            (m.dot(v) / d).abs().max(1e-3)
-        } else {
-            1.0
-        };
+        let (d, mv) = (v.length(), m.dot(v));
+        let c = if d > 0.0 { (mv / d).abs().max(1e-3) } else { 1.0 };
         // Seen from behind its plane it is hit on no sub-sample's front:
         // no disk to test.
-        let area = if m.dot(v) < 0.0 {
-            rec.area * an.length()
-        } else {
-            0.0
-        };
+        let area = if mv < 0.0 { rec.area * an.length() } else { 0.0 };
         o.copy_from_slice(&[
             m.x,
             m.y,
             m.z,
-            m.dot(v),
+            mv,
             v.x,
             v.y,
             v.z,
@@ -156,7 +147,7 @@ pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3
             p[3] * r,
         ]);
     }
-    out
+    Some(out)
 }
 
 impl Shape {
@@ -340,7 +331,7 @@ pub(crate) struct Pixel {
 /// Which sub-samples: the disk of its area on its plane (leaves and planar
 /// clusters: the ray–disk hits), the disks of a mixed cluster's facets on
 /// theirs, or, for a mixed cluster whose facets are not flat
-/// ([`faceted`]), its cone; where none is inside, or the footprint is
+/// ([`facets`]), its cone; where none is inside, or the footprint is
 /// narrower than half the smallest sub-sample (so that it covers one at
 /// most), the one its centre's map position falls in, or the nearest one
 /// in this pixel (a small splat's neighbouring pixels). Depth: along each
@@ -355,7 +346,6 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32, facets: &[Facets]) -> Lan
     }
     let sp = F32s::splat;
     let (ux, uy, uz) = (px.ux, px.uy, px.uz);
-    let zero = sp(0.0);
     if s.kind == MIXED && s.facets == u32::MAX {
         let (ex, ey, ez) = (ux - sp(s.w.x), uy - sp(s.w.y), uz - sp(s.w.z));
         let Some(cover) = spread((ex * ex + ey * ey + ez * ez).simd_le(sp(s.r2)), cover) else {
@@ -377,11 +367,8 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32, facets: &[Facets]) -> Lan
             if g[7] == 0.0 {
                 continue;
             }
-            let denom = sp(g[0]) * ux + sp(g[1]) * uy + sp(g[2]) * uz;
-            let t = sp(g[3]) / denom;
-            let front = denom.simd_lt(zero) & zero.simd_lt(t);
-            let (ex, ey, ez) = (ux * t - sp(g[4]), uy * t - sp(g[5]), uz * t - sp(g[6]));
-            let e2 = ex * ex + ey * ey + ez * ez;
+            let (t, front, e2) =
+                plane_hit(px, Vec3::new(g[0], g[1], g[2]), g[3], Vec3::new(g[4], g[5], g[6]));
             member |= front & e2.simd_le(sp(g[7]));
             let hit = front & e2.simd_le(sp(g[7] * HIDE_PLANAR));
             hide |= hit;
@@ -400,12 +387,7 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32, facets: &[Facets]) -> Lan
             hide,
         };
     }
-    // The plane's hit distance along each sub-sample's ray.
-    let denom = sp(s.m.x) * ux + sp(s.m.y) * uy + sp(s.m.z) * uz;
-    let t = sp(s.mv) / denom;
-    let front = denom.simd_lt(zero) & zero.simd_lt(t);
-    let (ex, ey, ez) = (ux * t - sp(s.v.x), uy * t - sp(s.v.y), uz * t - sp(s.v.z));
-    let e2 = ex * ex + ey * ey + ez * ez;
+    let (t, front, e2) = plane_hit(px, s.m, s.mv, s.v);
     let Some(cover) = spread(front & e2.simd_le(sp(s.disk2)), cover) else {
         return one(s, px, cover);
     };
@@ -418,6 +400,20 @@ pub(crate) fn lanes(s: &Shape, px: &Pixel, cover: f32, facets: &[Facets]) -> Lan
         far: depth + slack,
         hide: front & e2.simd_le(sp(s.disk2 * grow)),
     }
+}
+
+/// Along each sub-sample's ray of `px`: the distance `t` to the plane
+/// `m·x = mv`, whether the ray meets its front there, and the squared
+/// distance of that hit from `v`.
+#[inline(always)]
+fn plane_hit(px: &Pixel, m: Vec3, mv: f32, v: Vec3) -> (F32s, M32s, F32s) {
+    let sp = F32s::splat;
+    let zero = sp(0.0);
+    let denom = sp(m.x) * px.ux + sp(m.y) * px.uy + sp(m.z) * px.uz;
+    let t = sp(mv) / denom;
+    let front = denom.simd_lt(zero) & zero.simd_lt(t);
+    let (ex, ey, ez) = (px.ux * t - sp(v.x), px.uy * t - sp(v.y), px.uz * t - sp(v.z));
+    (t, front, ex * ex + ey * ey + ez * ez)
 }
 
 /// The whole fragment at one sub-sample: the one its centre's map position
