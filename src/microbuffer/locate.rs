@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::simd::{F32s, Real};
-use crate::tree::{Cluster, MIXED, NodeId, SplatRecord, Tree};
+use crate::tree::{Cluster, LEAF, MIXED, NodeId, PLANAR, SplatRecord, Tree, field};
 
 /// What splatting reads of a node, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -55,6 +55,12 @@ pub(crate) struct NodeLight<'a> {
     pub kind: u32,
     pub radiance: Vec3,
     pub cluster: &'a Cluster,
+    /// How far the node's surface may rise above its centre along a unit
+    /// direction at sine `s` to its normal: `rise·s + lift` (a leaf: its
+    /// disk's radius and 0; a planar cluster: `R` and `R·sin β`, its plane
+    /// and how far its surfels leave it; a mixed one: unbounded).
+    pub rise: f32,
+    pub lift: f32,
 }
 
 impl NodeLight<'static> {
@@ -65,6 +71,8 @@ impl NodeLight<'static> {
             kind,
             radiance,
             cluster: &Cluster::NONE,
+            rise: 0.0,
+            lift: f32::INFINITY,
         }
     }
 }
@@ -75,6 +83,14 @@ impl<'a> NodeLight<'a> {
     pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(&'a SplatRecord, Self)> {
         let k = node as usize;
         let rec = tree.splat.get(k)?;
+        let (rise, lift) = match rec.kind {
+            LEAF => ((rec.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
+            PLANAR => {
+                let r = tree.bounding_radius(node);
+                (r, r * tree.nodes.get(node, field::SIN))
+            }
+            _ => (0.0, f32::INFINITY),
+        };
         Some((
             rec,
             NodeLight {
@@ -85,6 +101,8 @@ impl<'a> NodeLight<'a> {
                 } else {
                     &Cluster::NONE
                 },
+                rise,
+                lift,
             },
         ))
     }
@@ -197,7 +215,18 @@ pub(crate) fn locate<V: Real>(
     let x = (px + py + one) * half;
     let y = (px - py + one) * half;
     let inf = V::splat(f32::INFINITY);
-    let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum);
+    // A node whose surface lies wholly on or below the receiver's tangent
+    // plane shows nothing: the receiver's own wall, which rounding puts a
+    // hair below it and facing it (half a cut's nodes, which would leave
+    // a cone of a pixel's width on the horizon).
+    let (kx, ky, kz) = (
+        s.ny * f.nz - s.nz * f.ny,
+        s.nz * f.nx - s.nx * f.nz,
+        s.nx * f.ny - s.ny * f.nx,
+    );
+    let sine = (kx * kx + ky * ky + kz * kz).sqrt();
+    let top = vx * f.nx + vy * f.ny + vz * f.nz + V::splat(light.rise) * sine + V::splat(light.lift);
+    let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum) & zero.lt(top);
     Located {
         valid,
         d,
