@@ -160,7 +160,7 @@ fn each_kind_of_damage_has_its_error() {
             e,
             TreeFileError::UnsupportedVersion {
                 found: 1,
-                supported: 2
+                supported: 3
             }
         ),
         "{e}"
@@ -192,7 +192,7 @@ fn each_kind_of_damage_has_its_error() {
     );
 
     // A child link out of range, checksum made right: node 0's child field.
-    let (nodes_at, node) = (64 + 40 * 8, 72);
+    let (nodes_at, node) = (64 + 40 * 8, 96);
     let mut b = good.clone();
     b[nodes_at + 36..nodes_at + 40].copy_from_slice(&1000u32.to_le_bytes());
     fix_checksum(&mut b);
@@ -212,6 +212,18 @@ fn each_kind_of_damage_has_its_error() {
         matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == nodes_at + 2 * node),
         "{e}"
     );
+
+    // A light centroid far outside node 2's sphere (its x, after the
+    // area centroid).
+    let mut b = good.clone();
+    b[nodes_at + 2 * node + 84..nodes_at + 2 * node + 88].copy_from_slice(&1e6f32.to_le_bytes());
+    fix_checksum(&mut b);
+    let e = load(&b);
+    assert!(
+        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == nodes_at + 2 * node),
+        "{e}"
+    );
+    assert!(e.to_string().contains("light centroid"), "{e}");
 
     // Two leaves of one surfel.
     let tree = corner_file();

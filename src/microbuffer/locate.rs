@@ -17,19 +17,26 @@ pub(crate) struct NodeSplat<V> {
     pub nx: V,
     pub ny: V,
     pub nz: V,
+    /// The light centroid.
+    pub lx: V,
+    pub ly: V,
+    pub lz: V,
 }
 
 impl NodeSplat<f32> {
     #[inline(always)]
     pub(super) fn of(r: &SplatRecord) -> Self {
         NodeSplat {
-            cx: r.center[0],
-            cy: r.center[1],
-            cz: r.center[2],
+            cx: r.centroid[0],
+            cy: r.centroid[1],
+            cz: r.centroid[2],
             area: r.area,
             nx: r.normal[0],
             ny: r.normal[1],
             nz: r.normal[2],
+            lx: r.light_centroid[0],
+            ly: r.light_centroid[1],
+            lz: r.light_centroid[2],
         }
     }
 
@@ -44,6 +51,9 @@ impl NodeSplat<f32> {
             nx: F32s::splat(self.nx),
             ny: F32s::splat(self.ny),
             nz: F32s::splat(self.nz),
+            lx: F32s::splat(self.lx),
+            ly: F32s::splat(self.ly),
+            lz: F32s::splat(self.lz),
         }
     }
 }
@@ -61,6 +71,11 @@ pub(crate) struct NodeLight<'a> {
     /// and how far its surfels leave it; a mixed one: unbounded).
     pub rise: f32,
     pub lift: f32,
+    /// A cluster's bounding radius `R` (0 for a leaf).
+    pub radius: f32,
+    /// Whether a cluster's light centroid (a mixed one's: a facet's) is not
+    /// its area centroid.
+    pub shifted: bool,
 }
 
 impl NodeLight<'static> {
@@ -73,6 +88,8 @@ impl NodeLight<'static> {
             cluster: &Cluster::NONE,
             rise: 0.0,
             lift: f32::INFINITY,
+            radius: 0.0,
+            shifted: false,
         }
     }
 }
@@ -83,26 +100,40 @@ impl<'a> NodeLight<'a> {
     pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(&'a SplatRecord, Self)> {
         let k = node as usize;
         let rec = tree.splat.get(k)?;
+        let cluster = if rec.kind == MIXED {
+            &tree.cluster[tree.facets_of[k] as usize]
+        } else {
+            &Cluster::NONE
+        };
+        let radius = if rec.kind == LEAF {
+            0.0
+        } else {
+            tree.bounding_radius(node)
+        };
         let (rise, lift) = match rec.kind {
             LEAF => ((rec.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
-            PLANAR => {
-                let r = tree.bounding_radius(node);
-                (r, r * tree.nodes.get(node, field::SIN))
-            }
+            PLANAR => (radius, radius * tree.nodes.get(node, field::SIN)),
             _ => (0.0, f32::INFINITY),
+        };
+        let shifted = match rec.kind {
+            PLANAR => rec.light_centroid != rec.centroid,
+            MIXED => cluster
+                .light
+                .iter()
+                .zip(&cluster.plane)
+                .any(|(l, p)| l[..] != p[..3]),
+            _ => false,
         };
         Some((
             rec,
             NodeLight {
                 kind: rec.kind,
                 radiance: tree.radiance_slice()[k],
-                cluster: if rec.kind == MIXED {
-                    &tree.cluster[tree.facets_of[k] as usize]
-                } else {
-                    &Cluster::NONE
-                },
+                cluster,
                 rise,
                 lift,
+                radius,
+                shifted,
             },
         ))
     }
@@ -139,6 +170,25 @@ pub(crate) struct Located<V: Real> {
     pub wz: V,
     pub x: V,
     pub y: V,
+}
+
+/// The most a node's radiance is scaled for its light centroid (`locate`).
+const SHIFT: f32 = 4.0;
+
+/// `G = max(0, −m·ω)·max(0, n·ω)/|u|²`, `ω = u/|u|`: what a piece of
+/// surface of normal `m` (times its area fraction) at `u` from a receiver
+/// of normal `n` sends it per unit area and radiance (0 at `u = 0` or
+/// beyond the finite).
+#[inline(always)]
+fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
+    let zero = V::splat(0.0);
+    let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+    let l = l2.sqrt();
+    let w = [u[0] / l, u[1] / l, u[2] / l];
+    let facing = (-(m[0] * w[0] + m[1] * w[1] + m[2] * w[2])).max_of(zero);
+    let cos = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]).max_of(zero);
+    let g = facing * cos / l2;
+    V::select(zero.lt(l2) & l2.lt(V::splat(f32::INFINITY)) & zero.le(g), g, zero)
 }
 
 /// Places node `s` (showing `light`) in the microbuffer of receiver `f`
@@ -209,6 +259,43 @@ pub(crate) fn locate<V: Real>(
     let wx = dx * f.tx + dy * f.ty + dz * f.tz;
     let wy = dx * f.bx + dy * f.by + dz * f.bz;
     let wz = dx * f.nx + dy * f.ny + dz * f.nz;
+    let radiance = if light.shifted {
+        // A cluster is drawn at its area centroid `c` (its coverage); its
+        // light comes from its light centroid `l` (a mixed one's facets,
+        // each from its own: one point for all would blend facets facing
+        // ways the receiver does not see). Scale the radiance by
+        // `Σ|L|₁·G(l) / Σ|L|₁·G(c)`, `G = max(0, −n̄·ω)·cosθ/d²` per facet,
+        // so that it sends `A·L̄·G(l)`: no first-order error in where the
+        // light lies. At most `SHIFT` (where `G(c)` nears 0 at the horizon).
+        let n = [f.nx, f.ny, f.nz];
+        let (mut at_l, mut at_c) = (zero, zero);
+        if light.kind == MIXED {
+            let r = V::splat(light.radius);
+            for (g, off) in light.cluster.facet.iter().zip(&light.cluster.light) {
+                let (m, bright) = (
+                    [V::splat(g[0]), V::splat(g[1]), V::splat(g[2])],
+                    V::splat(g[3] + g[4] + g[5]),
+                );
+                let u = [
+                    s.cx + V::splat(off[0]) * r - f.px,
+                    s.cy + V::splat(off[1]) * r - f.py,
+                    s.cz + V::splat(off[2]) * r - f.pz,
+                ];
+                at_l = at_l + bright * transfer(m, u, n);
+                at_c = at_c + bright * transfer(m, [vx, vy, vz], n);
+            }
+        } else {
+            let m = [s.nx, s.ny, s.nz];
+            at_l = transfer(m, [s.lx - f.px, s.ly - f.py, s.lz - f.pz], n);
+            at_c = transfer(m, [vx, vy, vz], n);
+        }
+        let g = (at_l / at_c).min_of(V::splat(SHIFT));
+        // `G(c)` 0, or NaN from overflow: unscaled.
+        let g = V::select(zero.lt(at_c) & zero.le(g), g, V::splat(1.0));
+        radiance.map(|c| c * g)
+    } else {
+        radiance
+    };
     let sum = wx.abs() + wy.abs() + wz.max_of(zero);
     let (px, py) = (wx / sum, wy / sum);
     let one = V::splat(1.0);

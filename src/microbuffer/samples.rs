@@ -43,7 +43,7 @@ const HIDE_PLANAR: f32 = 2.0;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Shape {
     kind: u32,
-    /// The node's centre in the receiver's frame, its distance and unit
+    /// The node's centre (its area centroid) in the receiver's frame, its distance and unit
     /// direction.
     v: Vec3,
     d: f32,
@@ -115,7 +115,7 @@ pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3
         return None;
     }
     let r = tree.bounding_radius(node);
-    let centre = Vec3::from_array(rec.center);
+    let centre = Vec3::from_array(rec.centroid);
     let mut out = [0.0; FACETS * FACET];
     for ((f, p), o) in cluster
         .facet
@@ -165,7 +165,7 @@ impl Shape {
         let rec = &tree.splat[node as usize];
         let r = tree.bounding_radius(node);
         let local = |x: Vec3| Vec3::new(x.dot(frame[0]), x.dot(frame[1]), x.dot(frame[2]));
-        let v = local(Vec3::from_array(rec.center) - position);
+        let v = local(Vec3::from_array(rec.centroid) - position);
         let d = v.length();
         let w = v / d;
         let n = local(Vec3::from_array(rec.normal));

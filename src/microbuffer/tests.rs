@@ -18,10 +18,11 @@ const ONE: [f32; 3] = [1.0; 3];
 /// A unit-area cluster at `c` facing the origin.
 fn record(c: Vec3) -> SplatRecord {
     SplatRecord {
-        center: c.to_array(),
+        centroid: c.to_array(),
         area: 1.0,
         normal: (-c).to_array(),
         kind: PLANAR,
+        light_centroid: c.to_array(),
     }
 }
 
@@ -49,10 +50,11 @@ fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
         _ => (rng.unit_vector() * d, rng.unit_vector()),
     };
     SplatRecord {
-        center: center.to_array(),
+        centroid: center.to_array(),
         area: d * d * 10f32.powf(rng.f32() * 5.0 - 4.0),
         normal: normal.to_array(),
         kind: if leaf { LEAF } else { PLANAR },
+        light_centroid: center.to_array(),
     }
 }
 
@@ -264,7 +266,7 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
     mb.reset(at, (Vec3::new(0.5, 0.0, 0.5) - at).normalize());
     let l = mb.locate(rec, &light).expect("the floor faces the receiver");
     assert_eq!(l.radiance, [2.0; 3], "the floor's radiance alone");
-    let c = Vec3::from_array(rec.center);
+    let c = Vec3::from_array(rec.centroid);
     let (d, u) = ((at - c).length(), (at - c).normalize());
     let floor_area: f32 = surfels
         .iter()

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{FACETS, LEAF, LEAF_BIT, MAX_DEPTH, MIXED, NodeArrays, PLANAR, Tree};
+use super::{FACETS, LEAF, LEAF_BIT, MAX_DEPTH, MIXED, NodeArrays, NodeView, PLANAR, Tree};
 use crate::points::MAX_COORDINATE;
 
 /// Where a check failed.
@@ -23,6 +23,9 @@ pub(crate) struct Fault {
     pub what: String,
 }
 
+/// Mean normals are at most unit length, up to rounding.
+const UNIT: f32 = 1.0 + 1e-3;
+
 fn at(k: u32, what: String) -> Fault {
     Fault {
         place: Place::Node(k),
@@ -30,10 +33,14 @@ fn at(k: u32, what: String) -> Fault {
     }
 }
 
+/// Whether `p` is finite and inside node `v`'s bounding sphere, up to the
+/// rounding of its coordinates.
+fn inside(p: Vec3, v: &NodeView) -> bool {
+    p.is_finite() && (p - v.center).length() <= (v.radius + 2.0 * f32::EPSILON * p.abs().max_element()) * UNIT
+}
+
 /// Every node and facet value finite and within the range the build gives.
 pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
-    // Mean normals are at most unit length, up to rounding.
-    const UNIT: f32 = 1.0 + 1e-3;
     for k in 0..tree.len() as u32 {
         let v = tree.node(k);
         let kind = tree.splat[k as usize].kind;
@@ -51,6 +58,8 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
             Some("mean normal not finite or longer than 1")
         } else if !(v.radiance.is_finite() && v.radiance.min_element() >= 0.0) {
             Some("radiance not finite and ≥ 0")
+        } else if !inside(v.centroid, &v) || !inside(v.light_centroid, &v) {
+            Some("area or light centroid not finite or outside the bounding sphere")
         } else if !matches!(kind, PLANAR | LEAF | MIXED) || (kind == LEAF) != tree.is_leaf(k) {
             Some("kind does not match the node (leaf, planar or mixed)")
         } else {
@@ -65,16 +74,20 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
             let (an, l) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
             !(an.is_finite() && an.length() <= UNIT && l.is_finite() && l.min_element() >= 0.0)
         }) || c.plane.iter().any(|p| {
-            // The centroid lies in the sphere; a disk leaves its facet's
-            // plane by at most the sphere's diameter plus its own radius.
+            // The facet's and the node's centroids lie in the sphere; a disk
+            // leaves its facet's plane by at most the sphere's diameter plus
+            // its own radius.
             let off = Vec3::new(p[0], p[1], p[2]);
-            !(off.is_finite() && off.length() <= UNIT && (0.0..=3.0 * UNIT).contains(&p[3]))
+            !(off.is_finite() && off.length() <= 2.0 * UNIT && (0.0..=3.0 * UNIT).contains(&p[3]))
+        }) || c.light.iter().any(|l| {
+            let off = Vec3::from_array(*l);
+            !(off.is_finite() && off.length() <= 2.0 * UNIT)
         });
         if bad {
             return Err(Fault {
                 place: Place::Cluster(i),
                 what: format!(
-                    "cluster {i}: a facet's normal, radiance or plane is out of range ({FACETS} facets)"
+                    "cluster {i}: a facet's normal, radiance, plane or light centroid is out of range ({FACETS} facets)"
                 ),
             });
         }

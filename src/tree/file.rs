@@ -11,8 +11,8 @@
 //! | 12 | 40 | [`BakeRecord`]: scene hash u64, seed u64, density f32, light samples u32, bounces u32, flags u32 (bit 0 AO, bit 1 gathered), Ω f32, microbuffer u32 |
 //! | 52 | 12 | counts: surfels `n`, clusters (facets of the mixed nodes), tree depth (u32 each) |
 //! | 64 | 40 n | surfels: position, normal, radius, radiance |
-//! | | 72 (2n − 1) | nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance |
-//! | | 120 per cluster | facets: 3 × (area-weighted normal, radiance), then 3 × (centroid offset, reach), in units of the node's radius |
+//! | | 96 (2n − 1) | nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance, area centroid, light centroid |
+//! | | 156 per cluster | facets: 3 × (area-weighted normal, radiance), then 3 × (the facet's centroid less the node's area centroid, reach), then 3 × (the facet's light centroid less the node's area centroid), in units of the node's radius |
 //! | end − 8 | 8 | FNV-1a 64 of every byte before it |
 //!
 //! A reader checks, in this order, the magic, the version, the counts
@@ -28,18 +28,18 @@ use std::io::{Read, Write};
 use glam::Vec3;
 
 use super::check::{self, Place};
-use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree, field};
+use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree};
 use crate::points::{PointCloud, Surfel};
 
 /// The first eight bytes of a tree file.
 pub const MAGIC: [u8; 8] = *b"PBGITREE";
 /// The format version this library reads and writes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 const HEADER: usize = 64;
 const SURFEL: usize = 40;
-const NODE: usize = 72;
-const CLUSTER: usize = 120;
+const NODE: usize = 96;
+const CLUSTER: usize = 156;
 const CHECKSUM: usize = 8;
 const AO: u32 = 1;
 const GATHERED: u32 = 2;
@@ -310,10 +310,13 @@ impl TreeFile {
                 .to_array()
                 .iter()
                 .for_each(|&x| put_f32(&mut out, x));
+            s.centroid.iter().for_each(|&x| put_f32(&mut out, x));
+            s.light_centroid.iter().for_each(|&x| put_f32(&mut out, x));
         }
         for c in &tree.cluster {
             c.facet.iter().flatten().for_each(|&x| put_f32(&mut out, x));
             c.plane.iter().flatten().for_each(|&x| put_f32(&mut out, x));
+            c.light.iter().flatten().for_each(|&x| put_f32(&mut out, x));
         }
         let sum = checksum(&out);
         put_u64(&mut out, sum);
@@ -455,14 +458,14 @@ impl TreeFile {
             let area = rd.f32();
             let normal = rd.vec3().to_array();
             let kind = rd.u32();
-            let f = &pair.f;
+            tree.radiance.push(rd.vec3());
             tree.splat.push(SplatRecord {
-                center: [f[field::CX][slot], f[field::CY][slot], f[field::CZ][slot]],
+                centroid: rd.vec3().to_array(),
+                light_centroid: rd.vec3().to_array(),
                 area,
                 normal,
                 kind,
             });
-            tree.radiance.push(rd.vec3());
             tree.facets_of.push(if kind == MIXED {
                 tree.cluster.len() as u32
             } else {
@@ -480,7 +483,13 @@ impl TreeFile {
             ));
         }
         for c in tree.cluster.iter_mut() {
-            for x in c.facet.iter_mut().flatten().chain(c.plane.iter_mut().flatten()) {
+            for x in c
+                .facet
+                .iter_mut()
+                .flatten()
+                .chain(c.plane.iter_mut().flatten())
+                .chain(c.light.iter_mut().flatten())
+            {
                 *x = rd.f32();
             }
         }

@@ -115,11 +115,14 @@ impl NodeArrays {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct SplatRecord {
-    pub center: [f32; 3],
+    /// Where the node is splatted ([`NodeView::centroid`]).
+    pub centroid: [f32; 3],
     pub area: f32,
     pub normal: [f32; 3],
     /// [`PLANAR`], [`LEAF`] or [`MIXED`].
     pub kind: u32,
+    /// Where its light comes from ([`NodeView::light_centroid`]).
+    pub light_centroid: [f32; 3],
 }
 
 /// An inner node whose surfels' normals form one [`Cluster`] facet: it
@@ -149,13 +152,17 @@ pub(crate) struct Cluster {
     /// scene's scale), then its mean radiance `P/A` (r, g, b).
     pub facet: [[f32; 6]; FACETS],
     /// Per facet, where it lies, in units of the node's bounding radius `R`:
-    /// its area-weighted centroid less the node's centre (x, y, z: at most 1
-    /// in length), then how far its surfels' disks leave the plane through
-    /// that centroid along its mean normal. The microbuffer shows each facet
+    /// its area-weighted centroid less the node's area centroid (x, y, z:
+    /// at most 2 in length), then how far its surfels' disks leave the
+    /// plane through that centroid along its mean normal. The microbuffer shows each facet
     /// as the disk of its area on that plane (its outline and its depth),
     /// where one round cone at the centre, `±R` deep, merged a box's top with
     /// the floor behind it and let the light behind its edges through.
     pub plane: [[f32; 4]; FACETS],
+    /// Per facet, where its light comes from, in the same units: its
+    /// light centroid (its surfels weighted by area times `|L|₁`; its area
+    /// centroid where they send none) less the node's area centroid.
+    pub light: [[f32; 3]; FACETS],
 }
 
 impl Cluster {
@@ -163,6 +170,7 @@ impl Cluster {
     pub(crate) const NONE: Cluster = Cluster {
         facet: [[0.0; 6]; FACETS],
         plane: [[0.0; 4]; FACETS],
+        light: [[0.0; 3]; FACETS],
     };
 }
 
@@ -185,6 +193,12 @@ pub struct NodeView {
     pub normal: Vec3,
     /// Area-weighted mean outgoing radiance.
     pub radiance: Vec3,
+    /// Area centroid: where the node is splatted, its surface.
+    pub centroid: Vec3,
+    /// Light centroid: where its light comes from, the surfels' positions
+    /// weighted by area times radiance (`|L|₁`); the area centroid where
+    /// they send none.
+    pub light_centroid: Vec3,
     /// Left child (the right one is `left + 1`), `None` for a leaf.
     pub children: Option<NodeId>,
     /// The surfel of a leaf (index into the cloud), `None` for an inner node.
@@ -227,6 +241,8 @@ pub struct Tree {
 #[derive(Clone, Copy, Debug, Default)]
 struct BuildNode {
     center: [f32; 3],
+    centroid: [f32; 3],
+    light_centroid: [f32; 3],
     radius: f32,
     axis: [f32; 3],
     cos: f32,
@@ -292,7 +308,8 @@ impl Tree {
                 MIXED
             };
             tree.splat.push(SplatRecord {
-                center: b.center,
+                centroid: b.centroid,
+                light_centroid: b.light_centroid,
                 area: b.area,
                 normal: b.normal.to_array(),
                 kind,
@@ -363,6 +380,8 @@ impl Tree {
             area: self.splat[k].area,
             normal: Vec3::from_array(self.splat[k].normal),
             radiance: self.radiance[k],
+            centroid: Vec3::from_array(self.splat[k].centroid),
+            light_centroid: Vec3::from_array(self.splat[k].light_centroid),
             children: self.left_child(node),
             surfel: (c & LEAF_BIT != 0).then_some(c & !LEAF_BIT),
         }
