@@ -833,7 +833,9 @@ fn tree_files_and_crops() {
     let surfels = u32::from_le_bytes(good[52..56].try_into().unwrap()) as usize;
     let nodes_at = 64 + 40 * surfels;
     // The last node is the deepest rightmost leaf.
-    let last_node = nodes_at + 72 * (2 * surfels - 2);
+    // A node record is 96 bytes (tree file version 3).
+    let node = 96;
+    let last_node = nodes_at + node * (2 * surfels - 2);
     let files: Vec<(&str, Vec<u8>, Vec<String>)> = vec![
         (
             "empty.pbgi",
@@ -894,12 +896,12 @@ fn tree_files_and_crops() {
         ),
         (
             "nan-centre.pbgi",
-            with_checksum(edit(nodes_at + 72, &f32::NAN.to_le_bytes())),
-            vec![format!("byte {}: node 1: centre", nodes_at + 72)],
+            with_checksum(edit(nodes_at + node, &f32::NAN.to_le_bytes())),
+            vec![format!("byte {}: node 1: centre", nodes_at + node)],
         ),
         (
             "kind.pbgi",
-            with_checksum(edit(nodes_at + 72 + 56, &[5])),
+            with_checksum(edit(nodes_at + node + 56, &[5])),
             vec!["byte 56:".into(), "mixed nodes".into()],
         ),
         (

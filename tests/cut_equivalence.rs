@@ -202,6 +202,8 @@ fn prop_scale(input: Scaled) -> TestResult {
             center: a.center * s,
             radius: a.radius * s,
             area: a.area * s * s,
+            centroid: a.centroid * s,
+            light_centroid: a.light_centroid * s,
             ..a
         };
         if b != want {

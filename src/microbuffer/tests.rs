@@ -265,20 +265,32 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
     let mut mb = MicroBuffer::new(8).unwrap();
     mb.reset(at, (Vec3::new(0.5, 0.0, 0.5) - at).normalize());
     let l = mb.locate(rec, &light).expect("the floor faces the receiver");
-    assert_eq!(l.radiance, [2.0; 3], "the floor's radiance alone");
     let c = Vec3::from_array(rec.centroid);
     let (d, u) = ((at - c).length(), (at - c).normalize());
-    let floor_area: f32 = surfels
-        .iter()
-        .filter(|s| s.normal == Vec3::Y)
-        .map(|s| std::f32::consts::PI * s.radius * s.radius)
-        .sum();
+    let floor: Vec<&Surfel> = surfels.iter().filter(|s| s.normal == Vec3::Y).collect();
+    let floor_area: f32 = floor.iter().map(|s| std::f32::consts::PI * s.radius * s.radius).sum();
     let want = floor_area * u.y / (d * d);
     assert!(
         (l.omega / want - 1.0).abs() < 1e-4,
         "Ω {} against the floor's {want}",
         l.omega
     );
+    // The light it sends, `Ω·cosθ·L`, is the floor's alone, from the
+    // floor's centroid (its light centroid: the floor is uniform): no
+    // share of the wall's dim light.
+    let n = (Vec3::new(0.5, 0.0, 0.5) - at).normalize();
+    let g = |p: Vec3| {
+        let (v, l2) = ((p - at).normalize(), (p - at).length_squared());
+        (-v.y).max(0.0) * n.dot(v).max(0.0) / l2
+    };
+    let centroid = floor.iter().map(|s| s.position).sum::<Vec3>() / floor.len() as f32;
+    let sent = l.omega * (-u).dot(n).max(0.0) * l.radiance[0];
+    let floor_sends = floor_area * 2.0 * g(centroid);
+    assert!(
+        (sent / floor_sends - 1.0).abs() < 1e-3,
+        "sends {sent}, the floor {floor_sends}"
+    );
+    assert!(l.radiance[0] == l.radiance[1] && l.radiance[1] == l.radiance[2]);
 }
 
 /// A corner cluster as bright as a cloud may be, and so large that its area
