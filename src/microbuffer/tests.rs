@@ -268,7 +268,10 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
     let c = Vec3::from_array(rec.centroid);
     let (d, u) = ((at - c).length(), (at - c).normalize());
     let floor: Vec<&Surfel> = surfels.iter().filter(|s| s.normal == Vec3::Y).collect();
-    let floor_area: f32 = floor.iter().map(|s| std::f32::consts::PI * s.radius * s.radius).sum();
+    let floor_area: f32 = floor
+        .iter()
+        .map(|s| std::f32::consts::PI * s.radius * s.radius)
+        .sum();
     let want = floor_area * u.y / (d * d);
     assert!(
         (l.omega / want - 1.0).abs() < 1e-4,
