@@ -171,8 +171,16 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         brightest: Vec3::ZERO,
     };
     if radiance {
-        for r in &frags.radiance {
-            out.brightest = out.brightest.max(Vec3::from_array(*r));
+        // The nodes' own radiance, not the radiance they show: a cluster's
+        // light-centroid scale (`locate`) may show more than its surfels
+        // send, which the irradiance's bound must not follow.
+        let mut last = u32::MAX;
+        for &key in &frags.key {
+            let node = (key & 0xFFFF_FFFF) as u32;
+            if node != last {
+                out.brightest = out.brightest.max(brightest_of(tree, node));
+                last = node;
+            }
         }
     }
     let zero = F32s::splat(0.0);
@@ -239,6 +247,20 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
     }
     out
 }
+/// The brightest radiance node `node` holds: its mean, or a mixed
+/// cluster's brightest facet.
+#[inline(always)]
+fn brightest_of(tree: &Tree, node: u32) -> Vec3 {
+    let k = node as usize;
+    let mut b = tree.radiance_slice().get(k).copied().unwrap_or(Vec3::ZERO);
+    if let Some(f) = tree.facets_of.get(k).and_then(|&i| tree.cluster.get(i as usize)) {
+        for g in &f.facet {
+            b = b.max(Vec3::new(g[3], g[4], g[5]));
+        }
+    }
+    b
+}
+
 /// Irradiance `Σ radiance·∫cos dω` over the pixels, in pixel order, plus
 /// what `sky` (radiance toward pixel `p`, and its largest) sends through the
 /// open part `1 − coverage` of the pixels; at most `π` times the brightest
