@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::simd::{F32s, Real};
-use crate::tree::{Cluster, LEAF, MIXED, NodeId, PLANAR, SplatRecord, Tree, field};
+use crate::tree::{Cluster, MIXED, NodeId, SplatRecord, Tree};
 
 /// What splatting reads of a node, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -65,16 +65,11 @@ pub(crate) struct NodeLight<'a> {
     pub kind: u32,
     pub radiance: Vec3,
     pub cluster: &'a Cluster,
-    /// How far the node's surface may rise above its centre along a unit
-    /// direction at sine `s` to its normal: `rise·s + lift` (a leaf: its
-    /// disk's radius and 0; a planar cluster: `R` and `R·sin β`, its plane
-    /// and how far its surfels leave it; a mixed one: unbounded).
+    /// Its [`SplatRecord`]'s bounds: `rise·s + lift`, `R`, and whether
+    /// its light centroid is not its area centroid.
     pub rise: f32,
     pub lift: f32,
-    /// A cluster's bounding radius `R` (0 for a leaf).
     pub radius: f32,
-    /// Whether a cluster's light centroid (a mixed one's: a facet's) is not
-    /// its area centroid.
     pub shifted: bool,
 }
 
@@ -105,35 +100,16 @@ impl<'a> NodeLight<'a> {
         } else {
             &Cluster::NONE
         };
-        let radius = if rec.kind == LEAF {
-            0.0
-        } else {
-            tree.bounding_radius(node)
-        };
-        let (rise, lift) = match rec.kind {
-            LEAF => ((rec.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
-            PLANAR => (radius, radius * tree.nodes.get(node, field::SIN)),
-            _ => (0.0, f32::INFINITY),
-        };
-        let shifted = match rec.kind {
-            PLANAR => rec.light_centroid != rec.centroid,
-            MIXED => cluster
-                .light
-                .iter()
-                .zip(&cluster.plane)
-                .any(|(l, p)| l[..] != p[..3]),
-            _ => false,
-        };
         Some((
             rec,
             NodeLight {
                 kind: rec.kind,
                 radiance: tree.radiance_slice()[k],
                 cluster,
-                rise,
-                lift,
-                radius,
-                shifted,
+                rise: rec.rise,
+                lift: rec.lift,
+                radius: rec.radius,
+                shifted: rec.shifted,
             },
         ))
     }
@@ -177,18 +153,26 @@ const SHIFT: f32 = 4.0;
 
 /// `G = max(0, −m·ω)·max(0, n·ω)/|u|²`, `ω = u/|u|`: what a piece of
 /// surface of normal `m` (times its area fraction) at `u` from a receiver
-/// of normal `n` sends it per unit area and radiance (0 at `u = 0` or
-/// beyond the finite).
+/// of normal `n` sends it per unit area and radiance (0 at `u = 0`, and
+/// where `G` is not finite: a point closer than `10⁻¹⁹`, for which no
+/// ratio of `G`s means anything).
 #[inline(always)]
-fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
+pub(super) fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
     let zero = V::splat(0.0);
     let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
     let l = l2.sqrt();
     let w = [u[0] / l, u[1] / l, u[2] / l];
     let facing = (-(m[0] * w[0] + m[1] * w[1] + m[2] * w[2])).max_of(zero);
     let cos = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]).max_of(zero);
+    sent(facing, cos, l2)
+}
+
+/// [`transfer`] from its facing `max(0, −m·ω)`, `max(0, n·ω)` and `|u|²`.
+#[inline(always)]
+fn sent<V: Real>(facing: V, cos: V, l2: V) -> V {
+    let zero = V::splat(0.0);
     let g = facing * cos / l2;
-    V::select(zero.lt(l2) & l2.lt(V::splat(f32::INFINITY)) & zero.le(g), g, zero)
+    V::select(zero.lt(l2) & zero.le(g) & g.lt(V::splat(f32::INFINITY)), g, zero)
 }
 
 /// Places node `s` (showing `light`) in the microbuffer of receiver `f`
@@ -215,13 +199,15 @@ pub(crate) fn locate<V: Real>(
     let (dx, dy, dz) = (vx / d, vy / d, vz / d);
     let zero = V::splat(0.0);
     let mean = light.radiance;
+    // A mixed node's facets' `max(0, −n̄·ω)` toward its centroid.
+    let mut facing = [zero; 3];
     let (raw, radiance) = if light.kind == MIXED {
         // Each facet's `A·max(0, −n̄·ω)` as a fraction of the node's area (at
         // most 1, so `L·w` cannot overflow), and its radiance weighted by its
         // share `w / Σw` of the projected area (a share, not `w`: `L·w`
         // underflowed into subnormals for a dim facet a small part of a
         // huge node, and the mean came out 0.05 % above the brightest).
-        let mut w = [zero; 3];
+        let w = &mut facing;
         let mut area = zero;
         for (w, f) in w.iter_mut().zip(&light.cluster.facet) {
             let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
@@ -271,7 +257,10 @@ pub(crate) fn locate<V: Real>(
         let (mut at_l, mut at_c) = (zero, zero);
         if light.kind == MIXED {
             let r = V::splat(light.radius);
-            for (g, off) in light.cluster.facet.iter().zip(&light.cluster.light) {
+            // `G(c)` per facet from what placed the node: bit for bit
+            // `transfer` at `c`.
+            let cos = wz.max_of(zero);
+            for ((g, off), facing) in light.cluster.facet.iter().zip(&light.cluster.light).zip(facing) {
                 let (m, bright) = (
                     [V::splat(g[0]), V::splat(g[1]), V::splat(g[2])],
                     V::splat(g[3] + g[4] + g[5]),
@@ -282,16 +271,21 @@ pub(crate) fn locate<V: Real>(
                     s.cz + V::splat(off[2]) * r - f.pz,
                 ];
                 at_l = at_l + bright * transfer(m, u, n);
-                at_c = at_c + bright * transfer(m, [vx, vy, vz], n);
+                at_c = at_c + bright * sent(facing, cos, d2);
             }
         } else {
             let m = [s.nx, s.ny, s.nz];
             at_l = transfer(m, [s.lx - f.px, s.ly - f.py, s.lz - f.pz], n);
             at_c = transfer(m, [vx, vy, vz], n);
         }
-        let g = (at_l / at_c).min_of(V::splat(SHIFT));
-        // `G(c)` 0, or NaN from overflow: unscaled.
-        let g = V::select(zero.lt(at_c) & zero.le(g), g, V::splat(1.0));
+        // Both `G`s are finite (`transfer`), so the ratio is a number or
+        // `+∞`. Where `G(c)` is 0 (the centroid below the horizon or its
+        // facets facing away) there is no ratio: unscaled.
+        let g = V::select(
+            zero.lt(at_c),
+            (at_l / at_c).min_of(V::splat(SHIFT)),
+            V::splat(1.0),
+        );
         radiance.map(|c| c * g)
     } else {
         radiance

@@ -23,6 +23,7 @@ fn record(c: Vec3) -> SplatRecord {
         normal: (-c).to_array(),
         kind: PLANAR,
         light_centroid: c.to_array(),
+        ..SplatRecord::default()
     }
 }
 
@@ -55,6 +56,7 @@ fn node_around(rng: &mut Rng, leaf: bool) -> SplatRecord {
         normal: normal.to_array(),
         kind: if leaf { LEAF } else { PLANAR },
         light_centroid: center.to_array(),
+        ..SplatRecord::default()
     }
 }
 
@@ -335,4 +337,34 @@ fn the_largest_brightest_corner_cluster_shades_finite() {
             && e.max_element() <= std::f32::consts::PI * MAX_RADIANCE * 1.0001,
         "irradiance {e}"
     );
+}
+
+#[test]
+fn a_pieces_transfer_is_a_finite_number_at_any_distance() {
+    // Facing a receiver of normal +z from 45° above its horizon.
+    let m = [
+        -std::f32::consts::FRAC_1_SQRT_2,
+        0.0,
+        -std::f32::consts::FRAC_1_SQRT_2,
+    ];
+    let n = [0.0, 0.0, 1.0];
+    for d in [
+        0.0,
+        1e-30,
+        1e-20,
+        1e-10,
+        1.0,
+        1e10,
+        1e19,
+        1e30,
+        f32::MAX,
+        f32::INFINITY,
+        f32::NAN,
+    ] {
+        let g = transfer(m, [d, 0.0, d], n);
+        assert!(g.is_finite() && g >= 0.0, "G = {g} at distance {d}·√2");
+    }
+    // Head-on (facing 1), at 45° to the receiver's normal, at distance² 2.
+    let g = transfer(m, [1.0, 0.0, 1.0], n);
+    assert!((g - std::f32::consts::FRAC_1_SQRT_2 / 2.0).abs() < 1e-6, "{g}");
 }

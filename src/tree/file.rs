@@ -28,7 +28,7 @@ use std::io::{Read, Write};
 use glam::Vec3;
 
 use super::check::{self, Place};
-use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree};
+use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree, field};
 use crate::points::{PointCloud, Surfel};
 
 /// The first eight bytes of a tree file.
@@ -465,6 +465,7 @@ impl TreeFile {
                 area,
                 normal,
                 kind,
+                ..SplatRecord::default()
             });
             tree.facets_of.push(if kind == MIXED {
                 tree.cluster.len() as u32
@@ -492,6 +493,12 @@ impl TreeFile {
             {
                 *x = rd.f32();
             }
+        }
+        for k in 0..nodes as u32 {
+            let (r, sin) = (tree.bounding_radius(k), tree.nodes.get(k, field::SIN));
+            let cluster = tree.facets_of[k as usize];
+            let cluster = tree.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE);
+            tree.splat[k as usize].derive(r, sin, cluster);
         }
         check::values(&tree)
             .and_then(|()| check::structure(&tree, n as usize))

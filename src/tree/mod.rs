@@ -108,10 +108,11 @@ impl NodeArrays {
     }
 }
 
-/// What splatting reads of a node, in one aligned 32-byte record (one cache
-/// line holds a sibling pair): the splat position (the bounding sphere's
-/// centre), the area below the node, the area-weighted mean normal, and
-/// its kind.
+/// What splatting reads of a node, in one aligned 64-byte record (one cache
+/// line): where it is splatted and where its light comes from, the area
+/// below it, the area-weighted mean normal, its kind, and what the
+/// microbuffer derives of its bounds ([`SplatRecord::derive`]), so that a
+/// splat reads no other node array.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub(crate) struct SplatRecord {
@@ -123,6 +124,39 @@ pub(crate) struct SplatRecord {
     pub kind: u32,
     /// Where its light comes from ([`NodeView::light_centroid`]).
     pub light_centroid: [f32; 3],
+    /// How far the node's surface may rise above its centroid along a unit
+    /// direction at sine `s` to its normal: `rise·s + lift` (a leaf: its
+    /// disk's radius and 0; a planar cluster: `R` and `R·sin β`, its plane
+    /// and how far its surfels leave it; a mixed one: unbounded).
+    pub rise: f32,
+    pub lift: f32,
+    /// A cluster's bounding radius `R` (0 for a leaf).
+    pub radius: f32,
+    /// Whether a cluster's light centroid (a mixed one's: a facet's) is not
+    /// its area centroid.
+    pub shifted: bool,
+}
+
+impl SplatRecord {
+    /// Fills the derived fields from the node's bounding radius `radius`,
+    /// its cone's sine `sin` and, for a [`MIXED`] node, its `cluster`.
+    pub(crate) fn derive(&mut self, radius: f32, sin: f32, cluster: &Cluster) {
+        self.radius = if self.kind == LEAF { 0.0 } else { radius };
+        (self.rise, self.lift) = match self.kind {
+            LEAF => ((self.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
+            PLANAR => (radius, radius * sin),
+            _ => (0.0, f32::INFINITY),
+        };
+        self.shifted = match self.kind {
+            PLANAR => self.light_centroid != self.centroid,
+            MIXED => cluster
+                .light
+                .iter()
+                .zip(&cluster.plane)
+                .any(|(l, p)| l[..] != p[..3]),
+            _ => false,
+        };
+    }
 }
 
 /// An inner node whose surfels' normals form one [`Cluster`] facet: it
@@ -307,13 +341,16 @@ impl Tree {
             } else {
                 MIXED
             };
-            tree.splat.push(SplatRecord {
+            let mut rec = SplatRecord {
                 centroid: b.centroid,
                 light_centroid: b.light_centroid,
                 area: b.area,
                 normal: b.normal.to_array(),
                 kind,
-            });
+                ..SplatRecord::default()
+            };
+            rec.derive(b.radius, b.sin, &b.cluster);
+            tree.splat.push(rec);
             tree.radiance.push(b.radiance);
             if kind == MIXED {
                 tree.facets_of.push(tree.cluster.len() as u32);
