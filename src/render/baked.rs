@@ -87,6 +87,16 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
     }
     opts.surfel_density(scene)?;
     crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
+    crate::microbuffer::MicroBuffer::new(opts.glossy_microbuffer)?;
+    let omega = opts.glossy_max_solid_angle;
+    if !(omega.is_finite() && omega >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "glossy_max_solid_angle",
+            value: omega.to_string(),
+            expected: "a finite solid angle of at least 0",
+        }
+        .into());
+    }
     if let Some(crop) = opts.crop {
         crop.within(scene.camera.width, scene.camera.height)?;
     }

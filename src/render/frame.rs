@@ -187,6 +187,24 @@ impl<'s> Frame<'s> {
         Gather::new(&self.tree, &gather_options(&self.opts, scheme, &self.environment))
     }
 
+    /// Whether receivers with a glossy lobe gather apart: some material has
+    /// one, and the lobe is convolved (not in AO mode).
+    pub(crate) fn glossy_apart(&self) -> bool {
+        !self.opts.ao && self.scene.has_glossy()
+    }
+
+    /// The gather of the receivers whose material has a glossy lobe, at
+    /// their own Ω and N (`None` where no material has one, or in AO mode).
+    pub(crate) fn glossy_gather(&self) -> Result<Option<Gather<'_>>, Error> {
+        if !self.glossy_apart() {
+            return Ok(None);
+        }
+        let mut o = gather_options(&self.opts, self.opts.scheme, &self.environment);
+        o.cut.max_solid_angle = self.opts.glossy_max_solid_angle;
+        o.microbuffer = self.opts.glossy_microbuffer;
+        Gather::new(&self.tree, &o).map(Some)
+    }
+
     /// The window rendered: the crop, or the whole frame.
     pub(crate) fn window(&self) -> Crop {
         let c = &self.scene.camera;
@@ -368,6 +386,7 @@ impl<'s> Frame<'s> {
     pub fn render(&self, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<RenderOutput, RenderError> {
         let wall = Instant::now();
         let gather = self.gather()?;
+        let glossy = self.glossy_gather()?;
         let window = self.window();
         let (w, h) = (window.width(), window.height());
         let tiles_total = self.tiles();
@@ -379,7 +398,12 @@ impl<'s> Frame<'s> {
         let tiles: Vec<TileResult> = (0..tiles_total)
             .into_par_iter()
             .map(|tile| {
-                let out = self.render_tile(tile, &gather, lattice.as_ref(), &timers)?;
+                let out = self.render_tile(
+                    tile,
+                    [&gather, glossy.as_ref().unwrap_or(&gather)],
+                    lattice.as_ref(),
+                    &timers,
+                )?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(d as usize, tiles_total);
                 Ok(out)

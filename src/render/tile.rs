@@ -36,7 +36,7 @@ impl Frame<'_> {
     pub(crate) fn render_tile(
         &self,
         tile: usize,
-        gather: &Gather,
+        gathers: [&Gather; 2],
         lattice: Option<&Lattice>,
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
@@ -44,7 +44,7 @@ impl Frame<'_> {
         let window = self.window();
         let w = window.width();
         let eye = self.scene.camera.origin;
-        let mut gatherer = gather.gatherer();
+        let mut gatherers = gathers.map(Gather::gatherer);
         let pixels = self.tile_pixels(tile);
         let spp = opts.spp as usize;
         // What camera sample `s` of pixel `k` adds, at `[k * spp + s]`: its
@@ -99,7 +99,7 @@ impl Frame<'_> {
         // Sparse gathers: a pixel's samples that gather themselves on one
         // surface share one gather (the dense render keeps every one).
         let (own, sharing) = self.share_gathers(own, &pixels, eye);
-        let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherer, timers)?;
+        let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherers, timers)?;
         if opts.component != Component::Direct {
             // Irradiance not gathered at the sample itself: each sample gets
             // one indirect term, whether gathered, interpolated or shared.
@@ -178,40 +178,51 @@ impl Frame<'_> {
     }
 
     /// Cuts, splats and convolves camera samples `(s, point)` of `pixels`,
-    /// 16 to a packet: adds each one's indirect light to `acc.adds`, and
-    /// returns what each gathered (irradiance, or occlusion).
+    /// 16 to a packet, those with a glossy lobe apart with the second
+    /// gatherer (its own Ω and N): adds each one's indirect light to
+    /// `acc.adds`, and returns what each gathered (irradiance, or
+    /// occlusion), in `points`' order.
     fn gather_all(
         &self,
         points: &[(u32, PacketPoint)],
         pixels: &[(u32, u32)],
         acc: &mut Gathered,
-        gatherer: &mut Gatherer,
+        gatherers: &mut [Gatherer; 2],
         timers: &Timers,
     ) -> Result<Vec<Vec3>, RenderError> {
         let spp = self.opts.spp as usize;
-        let mut gathered = Vec::with_capacity(points.len());
-        for chunk in points.chunks(LANES) {
-            let points: Vec<&PacketPoint> = chunk.iter().map(|(_, pp)| pp).collect();
-            let receivers = points
-                .iter()
-                .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
-                .collect::<Result<Vec<_>, _>>()?;
-            let t1 = Instant::now();
-            acc.stats.merge(&gatherer.cut(&receivers)?);
-            let t2 = Instant::now();
-            timers.trav.add((t2 - t1).as_secs_f64());
-            let out = self.gathered(&points, gatherer);
-            timers.others.add(t2.elapsed().as_secs_f64());
-            for ((s, pp), (e, l)) in chunk.iter().zip(out) {
-                if !l.is_finite() {
-                    return Err(non_finite("gather", pixels, pp, *s, l));
+        let mut gathered = vec![Vec3::ZERO; points.len()];
+        let apart = self.glossy_apart();
+        let glossy =
+            |(_, pp): &(u32, PacketPoint)| apart && self.scene.materials[pp.point.material].glossy.is_some();
+        for (gatherer, lobe) in gatherers.iter_mut().zip([false, true]) {
+            let group: Vec<usize> = (0..points.len())
+                .filter(|&i| glossy(&points[i]) == lobe)
+                .collect();
+            for chunk in group.chunks(LANES) {
+                let packet: Vec<&PacketPoint> = chunk.iter().map(|&i| &points[i].1).collect();
+                let receivers = packet
+                    .iter()
+                    .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let t1 = Instant::now();
+                acc.stats.merge(&gatherer.cut(&receivers)?);
+                let t2 = Instant::now();
+                timers.trav.add((t2 - t1).as_secs_f64());
+                let out = self.gathered(&packet, gatherer);
+                timers.others.add(t2.elapsed().as_secs_f64());
+                for (&i, (e, l)) in chunk.iter().zip(out) {
+                    let (s, pp) = &points[i];
+                    if !l.is_finite() {
+                        return Err(non_finite("gather", pixels, pp, *s, l));
+                    }
+                    if self.opts.component != Component::Direct {
+                        acc.adds[pp.pixel * spp + *s as usize] += l;
+                    }
+                    gathered[i] = e;
                 }
-                if self.opts.component != Component::Direct {
-                    acc.adds[pp.pixel * spp + *s as usize] += l;
-                }
-                gathered.push(e);
+                acc.count += chunk.len();
             }
-            acc.count += chunk.len();
         }
         Ok(gathered)
     }

@@ -116,11 +116,18 @@ pub struct ReportArgs {
 #[derive(Args, Clone)]
 pub struct Settings {
     /// Ω: largest solid angle (sr) of a splatted cluster.
-    #[arg(long, default_value_t = CutOptions::default().max_solid_angle)]
+    #[arg(long, default_value_t = RenderOptions::default().cut.max_solid_angle)]
     pub max_solid_angle: f32,
     /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
     pub microbuffer: usize,
+    /// Ω of the gathers at receivers with a glossy lobe (which reads where
+    /// each cluster's light is drawn, so needs finer clusters).
+    #[arg(long, default_value_t = RenderOptions::default().glossy_max_solid_angle)]
+    pub glossy_max_solid_angle: f32,
+    /// Microbuffer resolution of the gathers at receivers with a glossy lobe.
+    #[arg(long, default_value_t = RenderOptions::default().glossy_microbuffer)]
+    pub glossy_microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
     #[arg(long, default_value_t = RenderOptions::default().bounces)]
     pub bounces: u32,
@@ -149,6 +156,8 @@ impl Settings {
                 isa: parse_isa(&self.isa)?,
             },
             microbuffer: self.microbuffer,
+            glossy_max_solid_angle: self.glossy_max_solid_angle,
+            glossy_microbuffer: self.glossy_microbuffer,
             bounces: self.bounces,
             spp,
             density: self.density.unwrap_or(RenderOptions::default().density),

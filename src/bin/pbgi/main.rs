@@ -328,8 +328,16 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         opts.bounces,
         if opts.ao { ", ambient occlusion" } else { "" }
     );
+    let glossy = if scene.has_glossy() && !opts.ao {
+        format!(
+            " (glossy: Ω {}, microbuffer {})",
+            opts.glossy_max_solid_angle, opts.glossy_microbuffer
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "scheme {} on {}, Ω {}, microbuffer {}, {} thread(s)",
+        "scheme {} on {}, Ω {}, microbuffer {}{glossy}, {} thread(s)",
         match out.choice {
             SchemeChoice::Auto => format!(
                 "auto ({}; single for packets under {} receivers)",
