@@ -204,6 +204,7 @@ fn main() -> ExitCode {
     for &isa in &args.isas {
         let options = CutOptions {
             max_solid_angle: args.max_solid_angle,
+            light_offset: 0.0,
             hybrid_threshold: args.threshold,
             isa: Some(isa),
         };
@@ -271,6 +272,7 @@ fn main() -> ExitCode {
             for &isa in &args.isas {
                 let options = CutOptions {
                     max_solid_angle: args.max_solid_angle,
+                    light_offset: 0.0,
                     hybrid_threshold: args.threshold,
                     isa: Some(isa),
                 };

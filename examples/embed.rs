@@ -78,6 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // 4. The traversal: Ω, the hybrid switch, and the ISA (None = PBGI_ISA or the best).
     let options = CutOptions {
         max_solid_angle: 0.01,
+        light_offset: 0.0,
         hybrid_threshold: 4,
         isa: None,
     };

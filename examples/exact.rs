@@ -7,6 +7,7 @@
 //!     [--scenes light,bounce,open,blocker] [--omega 0.1,0.05,…] [--n 8,12,…]
 //!     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid]
 //!     [--offset 2e-5] [--min-ms 30] [--dump] [--class mid|edge|corner]
+//!     [--light-offset K]
 //! ```
 //!
 //! Scenes: `light`, the closed room with a small bright ceiling light;
@@ -39,6 +40,7 @@ fn main() {
     let mut what = vec!["irr".to_string(), "occ".to_string(), "glossy".to_string()];
     let (mut lanes, mut jitter, mut offset, mut min_ms, mut dump) = (true, true, 2e-5f32, 30.0f64, false);
     let mut class = String::new();
+    let mut light_offset = 0.0f32;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -52,6 +54,7 @@ fn main() {
             "--offset" => offset = v.parse().expect("--offset"),
             "--min-ms" => min_ms = v.parse().expect("--min-ms"),
             "--class" => class = v,
+            "--light-offset" => light_offset = v.parse().expect("--light-offset"),
             "--scalar" => {
                 lanes = false;
                 i += 1;
@@ -77,7 +80,7 @@ fn main() {
     };
     let has = |w: &str| what.iter().any(|x| x == w);
     println!(
-        "pipeline {}, surfels {}, receivers offset {offset}, glossy roughness {}; errors in % (rel. RMSE / mean bias)",
+        "pipeline {}, surfels {}, receivers offset {offset}, light offset weight {light_offset}, glossy roughness {}; errors in % (rel. RMSE / mean bias)",
         if lanes { "16-lane" } else { "scalar" },
         if jitter { "jittered" } else { "grid" },
         lobe.roughness
@@ -134,6 +137,7 @@ fn main() {
                 for &n in &ns {
                     let g = Gather {
                         max_solid_angle: omega,
+                        light_offset,
                         resolution: n,
                         lanes,
                         scheme: Scheme::Packet,

@@ -429,6 +429,9 @@ pub enum Quantity {
 pub struct Gather {
     /// Ω of the cut.
     pub max_solid_angle: f32,
+    /// The weight of a node's light offset in the cut
+    /// ([`CutOptions::light_offset`]).
+    pub light_offset: f32,
     /// Microbuffer resolution N.
     pub resolution: usize,
     /// The 16-lane shading pipeline ([`shade_packet`], what the renderer
@@ -450,6 +453,7 @@ pub fn gather(
         tree,
         CutOptions {
             max_solid_angle: g.max_solid_angle,
+            light_offset: g.light_offset,
             ..Default::default()
         },
     )?;

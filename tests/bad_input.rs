@@ -230,23 +230,27 @@ fn surfels_receivers_and_options() {
     }
 
     let tree = Tree::build(&PointCloud::new((0..10).map(ok_surfel).collect()).unwrap());
-    let options = |max_solid_angle, hybrid_threshold| CutOptions {
+    let options = |max_solid_angle, light_offset, hybrid_threshold| CutOptions {
         max_solid_angle,
+        light_offset,
         hybrid_threshold,
         isa: None,
     };
-    for (omega, threshold, place) in [
-        (f32::NAN, 2, "max_solid_angle"),
-        (-1.0, 2, "max_solid_angle"),
-        (f32::INFINITY, 2, "max_solid_angle"),
-        (0.05, 18, "hybrid_threshold"),
-        (0.05, u32::MAX, "hybrid_threshold"),
+    for (omega, k, threshold, place) in [
+        (f32::NAN, 0.0, 2, "max_solid_angle"),
+        (-1.0, 0.0, 2, "max_solid_angle"),
+        (f32::INFINITY, 0.0, 2, "max_solid_angle"),
+        (0.05, f32::NAN, 2, "light_offset"),
+        (0.05, -1.0, 2, "light_offset"),
+        (0.05, f32::INFINITY, 2, "light_offset"),
+        (0.05, 0.0, 18, "hybrid_threshold"),
+        (0.05, 0.0, u32::MAX, "hybrid_threshold"),
     ] {
         count += 1;
         failures.extend(check(
-            &format!("CutOptions Ω {omega} threshold {threshold}"),
+            &format!("CutOptions Ω {omega} light offset {k} threshold {threshold}"),
             &want(&[place]),
-            || err(Traversal::new(&tree, options(omega, threshold))),
+            || err(Traversal::new(&tree, options(omega, k, threshold))),
         ));
     }
     for n in [0, 257, usize::MAX] {

@@ -27,7 +27,7 @@ fn prop_equivalence(case: Case) -> TestResult {
     let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
     let receivers = case.receivers(&surfels);
     EQUIVALENCE_RECEIVERS.fetch_add(receivers.len() as u64, Relaxed);
-    let cuts = match all_paths_agree(&tree, &receivers, case.omega, case.threshold) {
+    let cuts = match all_paths_agree(&tree, &receivers, case.omega, case.light_offset, case.threshold) {
         Ok(c) => c,
         Err(e) => return TestResult::error(e),
     };
@@ -58,11 +58,19 @@ fn prop_semantics(case: Case) -> TestResult {
     let surfels = case.surfels();
     let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
     let receivers = case.receivers(&surfels);
-    let t = traversal(&tree, case.omega, case.threshold, Isa::best()).unwrap();
+    let t = traversal(&tree, case.omega, case.light_offset, case.threshold, Isa::best()).unwrap();
     let cuts = t.cuts(Scheme::Hybrid, &receivers);
     let (parents, below) = (tree.parents(), surfels_below(&tree));
     for (i, (r, c)) in receivers.iter().zip(&cuts).enumerate() {
-        if let Err(e) = semantics(&tree, &parents, &below, &surfels, r, case.omega, c) {
+        if let Err(e) = semantics(
+            &tree,
+            &parents,
+            &below,
+            &surfels,
+            r,
+            (case.omega, case.light_offset),
+            c,
+        ) {
             return TestResult::error(format!("receiver {i} {r:?}: {e}"));
         }
     }
@@ -80,7 +88,14 @@ fn prop_broken_cuts_are_rejected(case: Case) -> TestResult {
     let surfels = case.surfels();
     let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
     let receivers = case.receivers(&surfels);
-    let t = traversal(&tree, case.omega, case.threshold, Isa::Portable).unwrap();
+    let t = traversal(
+        &tree,
+        case.omega,
+        case.light_offset,
+        case.threshold,
+        Isa::Portable,
+    )
+    .unwrap();
     let parents = tree.parents();
     let mut rng = common::Rng::new(case.receivers.seed);
     if tree.is_empty() {
@@ -215,11 +230,17 @@ fn prop_scale(input: Scaled) -> TestResult {
         .iter()
         .map(|r| Receiver::new(r.position() * s, r.normal()).unwrap())
         .collect();
-    let reference = traversal(&tree, case.omega, case.threshold, Isa::Portable)
-        .unwrap()
-        .cuts(Scheme::Scalar, &receivers);
+    let reference = traversal(
+        &tree,
+        case.omega,
+        case.light_offset,
+        case.threshold,
+        Isa::Portable,
+    )
+    .unwrap()
+    .cuts(Scheme::Scalar, &receivers);
     for isa in Isa::available() {
-        let t = traversal(&tree_s, case.omega, case.threshold, isa).unwrap();
+        let t = traversal(&tree_s, case.omega, case.light_offset, case.threshold, isa).unwrap();
         for scheme in Scheme::ALL {
             if let Some(d) = first_difference(&t.cuts(scheme, &receivers_s), &reference) {
                 return TestResult::error(format!("{scheme} on {isa}: cut changes under 2^{k}: {d}"));
@@ -246,14 +267,14 @@ fn every_hybrid_threshold_on_every_path() {
     receivers.truncate(receivers.len() - 9);
     let parents = tree.parents();
     for omega in [0.0, 0.02, 0.2] {
-        let t = traversal(&tree, omega, 2, Isa::Portable).unwrap();
+        let t = traversal(&tree, omega, 0.0, 2, Isa::Portable).unwrap();
         let scalar = t.cuts(Scheme::Scalar, &receivers);
         for c in &scalar {
             invariants(&tree, &parents, c).unwrap();
         }
         for isa in Isa::available() {
             for threshold in 0..=17 {
-                let t = traversal(&tree, omega, threshold, isa).unwrap();
+                let t = traversal(&tree, omega, 0.0, threshold, isa).unwrap();
                 let mut rec = CutRecorder::new(receivers.len());
                 let stats = t.run(Scheme::Hybrid, &receivers, &mut rec);
                 if let Some(d) = first_difference(&rec.into_cuts(), &scalar) {
@@ -288,7 +309,7 @@ fn thousands_of_receivers_on_the_box() {
     for jitter in [0.0, 1.0] {
         let receivers = pbgi::synthetic::receivers(tiles, 0.01, jitter, 11);
         for omega in [0.0, 0.02, 0.2] {
-            let cuts = all_paths_agree(&tree, &receivers, omega, 2).unwrap();
+            let cuts = all_paths_agree(&tree, &receivers, omega, 0.0, 2).unwrap();
             for (i, c) in cuts.iter().enumerate() {
                 invariants(&tree, &parents, c).unwrap_or_else(|e| panic!("receiver {i}: {e}"));
             }

@@ -379,7 +379,7 @@ fn options(omega: f32, threshold: u32) -> CutOptions {
     CutOptions {
         max_solid_angle: omega,
         hybrid_threshold: threshold,
-        isa: None,
+        ..CutOptions::default()
     }
 }
 

@@ -60,7 +60,7 @@ fn check_all(
     omega: f32,
     res: usize,
 ) -> Vec<(Vec3, f32)> {
-    let cuts = all_paths_agree(tree, receivers, omega, 2).unwrap();
+    let cuts = all_paths_agree(tree, receivers, omega, 0.0, 2).unwrap();
     let parents = tree.parents();
     for (i, c) in cuts.iter().enumerate() {
         invariants(tree, &parents, c).unwrap_or_else(|e| panic!("receiver {i} {:?}: {e}", receivers[i]));
@@ -123,7 +123,7 @@ fn scaling_by_powers_of_two_keeps_cuts_and_shading_bitwise() {
     );
     let tree = build(&surfels);
     let (omega, res) = (0.05, 8);
-    let cuts = all_paths_agree(&tree, &receivers, omega, 2).unwrap();
+    let cuts = all_paths_agree(&tree, &receivers, omega, 0.0, 2).unwrap();
     let shading = shade_everywhere(&tree, &receivers, omega, res).unwrap();
     check_bounded(&shading, max_radiance(&surfels)).unwrap();
     assert!(
@@ -139,7 +139,7 @@ fn scaling_by_powers_of_two_keeps_cuts_and_shading_bitwise() {
             .iter()
             .map(|r| Receiver::new(r.position() * s, r.normal()).unwrap())
             .collect();
-        let cuts_s = all_paths_agree(&tree_s, &recs_s, omega, 2).unwrap();
+        let cuts_s = all_paths_agree(&tree_s, &recs_s, omega, 0.0, 2).unwrap();
         if let Some(i) = (0..cuts.len()).find(|&i| cuts[i] != cuts_s[i]) {
             panic!("2^{k}: the cut of receiver {i} changes");
         }
@@ -392,7 +392,7 @@ fn hundred_thousand_coincident_surfels() {
         (Vec3::new(0.5, 0.5, 0.5), Vec3::Z),
     ])
     .unwrap();
-    let cuts = all_paths_agree(&tree, &r, 0.05, 2).unwrap();
+    let cuts = all_paths_agree(&tree, &r, 0.05, 0.0, 2).unwrap();
     let parents = tree.parents();
     for c in &cuts {
         invariants(&tree, &parents, c).unwrap();
@@ -504,7 +504,7 @@ fn deep_chains_stay_within_max_depth() {
         (Vec3::new(3.0, 1.0, 0.0), -Vec3::Y),
     ])
     .unwrap();
-    let cuts = all_paths_agree(&tree, &r, 0.0, 2).unwrap();
+    let cuts = all_paths_agree(&tree, &r, 0.0, 0.0, 2).unwrap();
     assert_eq!(cuts[0].splats.len(), n);
     eprintln!(
         "deep chain: {n} surfels, depth {} on paths {}",

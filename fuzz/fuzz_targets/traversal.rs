@@ -1,4 +1,4 @@
-//! Arbitrary surfels, receivers and Ω (structured: grids, ties, coincident
+//! Arbitrary surfels, receivers, Ω and light offset weight (structured: grids, ties, coincident
 //! points, receivers on surfels, edge-case radii and thresholds, raw bits):
 //! invalid input is a typed error; on valid input every scheme on every path
 //! this CPU runs gives the scalar cut (with and without discard bookkeeping)
@@ -19,6 +19,8 @@ struct Input {
     receivers: Vec<(Pos, Dir)>,
     omega: Scalar,
     threshold: u8,
+    /// The light offset's weight, `0, ¼, …, 8`.
+    light_offset: u8,
 }
 
 /// Splats only: the kernels skip the discard bookkeeping for such a sink.
@@ -64,6 +66,7 @@ fuzz_target!(|input: Input| {
     for isa in Isa::available() {
         let opts = CutOptions {
             max_solid_angle: omega,
+            light_offset: (input.light_offset % 33) as f32 / 4.0,
             hybrid_threshold: input.threshold as u32 % 18,
             isa: Some(isa),
         };

@@ -19,6 +19,8 @@ pub(crate) struct NodeLanes<V> {
     pub az: V,
     pub cos: V,
     pub sin: V,
+    /// How far the node's light centroid lies from its area centroid.
+    pub light_offset: V,
 }
 
 /// Receiver position and normal, for one receiver or one per lane.
@@ -61,6 +63,7 @@ impl NodeLanes<f32> {
             az: F32s::splat(self.az),
             cos: F32s::splat(self.cos),
             sin: F32s::splat(self.sin),
+            light_offset: F32s::splat(self.light_offset),
         }
     }
 }
@@ -110,10 +113,30 @@ pub(crate) fn faces_away<V: Real>(node: &NodeLanes<V>, o: &Offset<V>) -> V::Mask
     (node.sin * s + node.r).le(node.cos * va)
 }
 
-/// Mask 2: far enough to splat, `π R² < Ω d²` (no division: `d² = 0` is fine).
+/// The far test's parameters: Ω and the light offset's weight `k`.
+#[derive(Clone, Copy)]
+pub(crate) struct Far<V> {
+    pub max_solid_angle: V,
+    pub light_offset: V,
+}
+
+impl Far<f32> {
+    #[inline(always)]
+    pub fn splat(&self) -> Far<F32s> {
+        Far {
+            max_solid_angle: F32s::splat(self.max_solid_angle),
+            light_offset: F32s::splat(self.light_offset),
+        }
+    }
+}
+
+/// Mask 2: far enough to splat, `π S² < Ω d²` with `S = R + k·|l − c|`
+/// (`R` where the node's light lies where its surface does, or `k = 0`; no
+/// division: `d² = 0` is fine).
 #[inline(always)]
-pub(crate) fn far<V: Real>(node: &NodeLanes<V>, o: &Offset<V>, max_solid_angle: V) -> V::Mask {
-    (V::splat(std::f32::consts::PI) * node.r * node.r).lt(max_solid_angle * o.d2)
+pub(crate) fn far<V: Real>(node: &NodeLanes<V>, o: &Offset<V>, test: &Far<V>) -> V::Mask {
+    let s = node.r + test.light_offset * node.light_offset;
+    (V::splat(std::f32::consts::PI) * s * s).lt(test.max_solid_angle * o.d2)
 }
 
 /// Discard and far masks of the whole test, evaluated eagerly (for lanes).
@@ -121,11 +144,11 @@ pub(crate) fn far<V: Real>(node: &NodeLanes<V>, o: &Offset<V>, max_solid_angle: 
 pub(crate) fn classify<V: Real>(
     node: &NodeLanes<V>,
     rec: &ReceiverLanes<V>,
-    max_solid_angle: V,
+    test: &Far<V>,
 ) -> (V::Mask, V::Mask) {
     let o = offset(node, rec);
     let discard = below_horizon(node, rec, &o) | faces_away(node, &o);
-    (discard, far(node, &o, max_solid_angle))
+    (discard, far(node, &o, test))
 }
 
 /// One of the test's outcomes for a (receiver, node) pair.
@@ -145,13 +168,13 @@ pub enum Outcome {
 pub(crate) fn outcome_scalar(
     node: &NodeLanes<f32>,
     rec: &ReceiverLanes<f32>,
-    max_solid_angle: f32,
+    test: &Far<f32>,
     leaf: bool,
 ) -> Outcome {
     let o = offset(node, rec);
     if below_horizon(node, rec, &o) || faces_away(node, &o) {
         Outcome::Discard
-    } else if leaf || far(node, &o, max_solid_angle) {
+    } else if leaf || far(node, &o, test) {
         Outcome::Splat
     } else {
         Outcome::Traverse
@@ -173,5 +196,6 @@ pub(crate) fn load_node(a: &NodeArrays, k: u32) -> NodeLanes<f32> {
         az: f[field::AZ][s],
         cos: f[field::COS][s],
         sin: f[field::SIN][s],
+        light_offset: f[field::LIGHT_OFFSET][s],
     }
 }

@@ -99,6 +99,7 @@ impl TraversalStats {
 pub struct Traversal<'t> {
     pub(crate) tree: &'t Tree,
     pub(crate) max_solid_angle: f32,
+    light_offset: f32,
     pub(crate) hybrid_threshold: u32,
     isa: Isa,
 }
@@ -111,6 +112,14 @@ impl<'t> Traversal<'t> {
             return Err(Error::InvalidParameter {
                 name: "max_solid_angle",
                 value: max_solid_angle.to_string(),
+                expected: "a finite number ≥ 0",
+            });
+        }
+        let light_offset = options.light_offset;
+        if !(light_offset.is_finite() && light_offset >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "light_offset",
+                value: light_offset.to_string(),
                 expected: "a finite number ≥ 0",
             });
         }
@@ -128,6 +137,7 @@ impl<'t> Traversal<'t> {
         Ok(Self {
             tree,
             max_solid_angle,
+            light_offset,
             hybrid_threshold: options.hybrid_threshold,
             isa,
         })
@@ -146,6 +156,20 @@ impl<'t> Traversal<'t> {
     /// Ω.
     pub fn max_solid_angle(&self) -> f32 {
         self.max_solid_angle
+    }
+
+    /// The weight of a node's light offset in the far test.
+    pub fn light_offset(&self) -> f32 {
+        self.light_offset
+    }
+
+    /// The far test's parameters.
+    #[inline(always)]
+    pub(crate) fn far(&self) -> classify::Far<f32> {
+        classify::Far {
+            max_solid_angle: self.max_solid_angle,
+            light_offset: self.light_offset,
+        }
     }
 
     /// Traverses the tree for every receiver, on this thread, reporting to `sink`.

@@ -55,7 +55,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
         return;
     }
     let recs = load_receivers(receivers);
-    let max_solid_angle = F32s::splat(t.max_solid_angle);
+    let test = t.far().splat();
     // Depth first, both children pushed: at most depth + 1 entries.
     let mut nodes = [0u32; MAX_DEPTH + 2];
     let mut masks = [0u16; MAX_DEPTH + 2];
@@ -75,7 +75,7 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
 
         let node = load_node(a, k).splat();
         let child = a.child(k);
-        let (discard, far) = classify(&node, &recs, max_solid_angle);
+        let (discard, far) = classify(&node, &recs, &test);
         let discard = discard.to_bitmask() as u16 & mask;
         let kept = mask & !discard;
         let (splat, traverse) = if child & LEAF_BIT != 0 {

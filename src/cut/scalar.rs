@@ -28,7 +28,7 @@ pub(crate) fn traverse<S: CutSink>(
         tests += 1;
         let node = load_node(a, k);
         let child = a.child(k);
-        match outcome_scalar(&node, rec, t.max_solid_angle, child & LEAF_BIT != 0) {
+        match outcome_scalar(&node, rec, &t.far(), child & LEAF_BIT != 0) {
             Outcome::Discard => {
                 if S::DISCARDS {
                     sink.discard(index, k);

@@ -87,6 +87,7 @@ fn load_pair_nodes(pairs: &[&PairRecord; PAIRS]) -> NodeLanes<F32s> {
         az: load_field(pairs, field::AZ),
         cos: load_field(pairs, field::COS),
         sin: load_field(pairs, field::SIN),
+        light_offset: load_field(pairs, field::LIGHT_OFFSET),
     }
 }
 
@@ -171,7 +172,7 @@ fn step<S: CutSink, const FLAGS: bool>(
     let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
         pairs[l / 2].child[l & 1]
     }));
-    let (discard, far) = classify(&node, rec, F32s::splat(t.max_solid_angle));
+    let (discard, far) = classify(&node, rec, &t.far().splat());
     let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
 
     let valid = lane_mask(2 * count) & !skipped;

@@ -88,14 +88,18 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
     opts.surfel_density(scene)?;
     crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
     crate::microbuffer::MicroBuffer::new(opts.glossy_microbuffer)?;
-    let omega = opts.glossy_max_solid_angle;
-    if !(omega.is_finite() && omega >= 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "glossy_max_solid_angle",
-            value: omega.to_string(),
-            expected: "a finite solid angle of at least 0",
+    for (name, v) in [
+        ("glossy_max_solid_angle", opts.glossy_max_solid_angle),
+        ("glossy_light_offset", opts.glossy_light_offset),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name,
+                value: v.to_string(),
+                expected: "a finite number ≥ 0",
+            }
+            .into());
         }
-        .into());
     }
     if let Some(crop) = opts.crop {
         crop.within(scene.camera.width, scene.camera.height)?;

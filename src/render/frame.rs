@@ -201,6 +201,7 @@ impl<'s> Frame<'s> {
         }
         let mut o = gather_options(&self.opts, self.opts.scheme, &self.environment);
         o.cut.max_solid_angle = self.opts.glossy_max_solid_angle;
+        o.cut.light_offset = self.opts.glossy_light_offset;
         o.microbuffer = self.opts.glossy_microbuffer;
         Gather::new(&self.tree, &o).map(Some)
     }

@@ -129,6 +129,10 @@ pub struct RenderOptions {
     pub glossy_max_solid_angle: f32,
     /// Microbuffer resolution of those gathers.
     pub glossy_microbuffer: usize,
+    /// The light offset's weight in the cut of those gathers
+    /// ([`CutOptions::light_offset`]): a lobe reads where a cluster's light
+    /// is drawn.
+    pub glossy_light_offset: f32,
     /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
     pub bounces: u32,
     /// Camera samples per pixel (antialiasing; each a receiver of direct light).
@@ -301,8 +305,9 @@ impl Default for RenderOptions {
             },
             scheme: SchemeChoice::Auto,
             microbuffer: 14,
-            glossy_max_solid_angle: 0.02,
+            glossy_max_solid_angle: 0.05,
             glossy_microbuffer: 24,
+            glossy_light_offset: 4.0,
             bounces: 1,
             spp: 4,
             gathers: Gathers::default(),

@@ -300,7 +300,9 @@ impl TreeFile {
         for k in 0..tree.len() as u32 {
             let (p, slot) = NodeArrays::locate(k);
             let pair = &tree.nodes.pairs[p];
-            pair.f.iter().for_each(|f| put_f32(&mut out, f[slot]));
+            pair.f[..field::STORED]
+                .iter()
+                .for_each(|f| put_f32(&mut out, f[slot]));
             put_u32(&mut out, pair.child[slot]);
             let s = &tree.splat[k as usize];
             put_f32(&mut out, s.area);
@@ -451,7 +453,7 @@ impl TreeFile {
         for k in 0..nodes as u32 {
             let (p, slot) = NodeArrays::locate(k);
             let pair = &mut tree.nodes.pairs[p];
-            for f in pair.f.iter_mut() {
+            for f in pair.f[..field::STORED].iter_mut() {
                 f[slot] = rd.f32();
             }
             pair.child[slot] = rd.u32();
@@ -494,12 +496,7 @@ impl TreeFile {
                 *x = rd.f32();
             }
         }
-        for k in 0..nodes as u32 {
-            let (r, sin) = (tree.bounding_radius(k), tree.nodes.get(k, field::SIN));
-            let cluster = tree.facets_of[k as usize];
-            let cluster = tree.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE);
-            tree.splat[k as usize].derive(r, sin, cluster);
-        }
+        tree.derive();
         check::values(&tree)
             .and_then(|()| check::structure(&tree, n as usize))
             .map_err(|fault| {

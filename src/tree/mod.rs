@@ -46,7 +46,12 @@ pub(crate) mod field {
     pub const AZ: usize = 6;
     pub const COS: usize = 7;
     pub const SIN: usize = 8;
-    pub const COUNT: usize = 9;
+    /// How far the node's light centroid lies from its area centroid
+    /// ([`super::Tree::derive`]; not stored in a tree file).
+    pub const LIGHT_OFFSET: usize = 9;
+    /// Fields a tree file stores.
+    pub const STORED: usize = 9;
+    pub const COUNT: usize = 10;
 }
 
 /// The node-test fields of two sibling nodes, structure-of-arrays within the
@@ -60,7 +65,8 @@ pub(crate) struct PairRecord {
     /// Per field: bounding-sphere centre x, y, z and radius (the sphere holds
     /// every disk below the node); normal-cone axis x, y, z (unit); cosine and
     /// sine of the cone half-angle, rounded outwards (a cone wider than a
-    /// hemisphere is stored as `(0, 1)`, which never culls).
+    /// hemisphere is stored as `(0, 1)`, which never culls); how far its
+    /// light centroid lies from its area centroid.
     pub f: [[f32; 2]; field::COUNT],
     /// Per slot: the pair record of the node's children, or `LEAF_BIT | surfel`.
     pub child: [u32; 2],
@@ -341,16 +347,14 @@ impl Tree {
             } else {
                 MIXED
             };
-            let mut rec = SplatRecord {
+            tree.splat.push(SplatRecord {
                 centroid: b.centroid,
                 light_centroid: b.light_centroid,
                 area: b.area,
                 normal: b.normal.to_array(),
                 kind,
                 ..SplatRecord::default()
-            };
-            rec.derive(b.radius, b.sin, &b.cluster);
-            tree.splat.push(rec);
+            });
             tree.radiance.push(b.radiance);
             if kind == MIXED {
                 tree.facets_of.push(tree.cluster.len() as u32);
@@ -359,7 +363,34 @@ impl Tree {
                 tree.facets_of.push(u32::MAX);
             }
         }
+        tree.derive();
         tree
+    }
+
+    /// Fills what is derived of the stored fields, where the tree is built
+    /// or read: each splat record's bounds ([`SplatRecord::derive`]), and
+    /// each node's light offset `|l − c|` (`l`, `c` its light and area
+    /// centroids; [`crate::CutOptions::light_offset`]).
+    pub(crate) fn derive(&mut self) {
+        for k in 0..self.splat.len() as u32 {
+            let (p, slot) = NodeArrays::locate(k);
+            let f = &mut self.nodes.pairs[p].f;
+            let (r, sin) = (f[field::R][slot], f[field::SIN][slot]);
+            let rec = &mut self.splat[k as usize];
+            let cluster = self.facets_of[k as usize];
+            rec.derive(
+                r,
+                sin,
+                self.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE),
+            );
+            let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
+            // Both centroids lie in the sphere (or the file was refused).
+            f[field::LIGHT_OFFSET][slot] = if offset.is_finite() {
+                offset.min(2.0 * r)
+            } else {
+                0.0
+            };
+        }
     }
 
     /// Number of nodes (`2n − 1` for `n` surfels, 0 for an empty cloud).

@@ -548,6 +548,8 @@ pub struct Case {
     pub cloud: CloudSpec,
     pub receivers: ReceiverSpec,
     pub omega: f32,
+    /// The light offset's weight `k` in the far test.
+    pub light_offset: f32,
     pub threshold: u32,
 }
 
@@ -555,8 +557,8 @@ impl fmt::Debug for Case {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "Case {{ {:?}, {:?}, Ω={:e}, hybrid_threshold={} }}",
-            self.cloud, self.receivers, self.omega, self.threshold
+            "Case {{ {:?}, {:?}, Ω={:e}, k={}, hybrid_threshold={} }}",
+            self.cloud, self.receivers, self.omega, self.light_offset, self.threshold
         )
     }
 }
@@ -567,6 +569,12 @@ impl Arbitrary for Case {
             cloud: CloudSpec::arbitrary_sized(g, 400),
             receivers: ReceiverSpec::arbitrary_sized(g, 80),
             omega: arbitrary_omega(g),
+            // Half the cases the plain test, the others a weight up to 8.
+            light_offset: if bool::arbitrary(g) {
+                0.0
+            } else {
+                (u32::arbitrary(g) % 33) as f32 / 4.0
+            },
             threshold: u32::arbitrary(g) % 18,
         }
     }
@@ -599,6 +607,12 @@ impl Arbitrary for Case {
         if self.threshold != 2 {
             out.push(Case {
                 threshold: 2,
+                ..self.clone()
+            });
+        }
+        if self.light_offset != 0.0 {
+            out.push(Case {
+                light_offset: 0.0,
                 ..self.clone()
             });
         }
@@ -732,9 +746,11 @@ fn decide(lhs: f64, rhs: f64, tol: f64) -> Option<bool> {
     }
 }
 
-pub fn node_test64(v: &NodeView, x: Vec3, n: Vec3, omega: f32) -> NodeTest64 {
+pub fn node_test64(v: &NodeView, x: Vec3, n: Vec3, omega: f32, k: f32) -> NodeTest64 {
     let (c, x, n) = (v.center.as_dvec3(), x.as_dvec3(), n.as_dvec3());
     let r = v.radius as f64;
+    // The far test's radius: `R + k·|l − c|` (light and area centroids).
+    let split = r + k as f64 * (v.light_centroid.as_dvec3() - v.centroid.as_dvec3()).length();
     let d = c - x;
     let len = d.length();
     // f32 evaluation errors are relative to |v| and R (v = c − x is one
@@ -745,9 +761,9 @@ pub fn node_test64(v: &NodeView, x: Vec3, n: Vec3, omega: f32) -> NodeTest64 {
     let (cos, sin) = (v.cone_cos as f64, v.cone_sin as f64);
     let s = a.cross(d).length();
     let faces_away = decide(sin * s + r, cos * a.dot(d), 3.0 * tol);
-    let pi_r2 = std::f64::consts::PI * r * r;
+    let pi_r2 = std::f64::consts::PI * split * split;
     let od2 = omega as f64 * len * len;
-    // `π R² < Ω d²`, with a relative tolerance and room for f32 underflow.
+    // `π S² < Ω d²`, with a relative tolerance and room for f32 underflow.
     let far = decide(pi_r2, od2, 1e-5 * (pi_r2 + od2) + 1e-36);
     NodeTest64 {
         below,
@@ -759,7 +775,8 @@ pub fn node_test64(v: &NodeView, x: Vec3, n: Vec3, omega: f32) -> NodeTest64 {
 /// The cut's outcomes checked against the f64 node test and against geometry:
 ///
 /// * a splatted node is not clearly discardable, and is a leaf or clearly not
-///   too near (`π R² < Ω d²` up to rounding);
+///   too near (`π S² < Ω d²` up to rounding, `S = R + k·|l − c|` at the
+///   light offset weight `k`);
 /// * a discarded node is below the tangent plane or faces away (up to
 ///   rounding), and each of its disks really is invisible: wholly below the
 ///   receiver's tangent plane, or the receiver lies behind the disk's plane;
@@ -772,7 +789,7 @@ pub fn semantics(
     below_lists: &[Vec<u32>],
     surfels: &[Surfel],
     rec: &Receiver,
-    omega: f32,
+    (omega, weight): (f32, f32),
     cut: &Cut,
 ) -> Result<(), String> {
     let (x, n) = (rec.position(), rec.normal());
@@ -780,7 +797,7 @@ pub fn semantics(
     let kept = |t: &NodeTest64| t.below == Some(false) && t.faces_away == Some(false);
     for &k in &cut.splats {
         let v = tree.node(k);
-        let t = node_test64(&v, x, n, omega);
+        let t = node_test64(&v, x, n, omega, weight);
         if discardable(&t) {
             return Err(format!(
                 "splatted node {k} is clearly discardable (below {:?}, faces away {:?})",
@@ -793,16 +810,17 @@ pub fn semantics(
             }
             if t.far == Some(false) {
                 return Err(format!(
-                    "splatted inner node {k} is too near: π R² = {:e} ≥ Ω d² = {:e}",
-                    std::f64::consts::PI * (v.radius as f64).powi(2),
-                    omega as f64 * (v.center.as_dvec3() - x.as_dvec3()).length_squared()
+                    "splatted inner node {k} is too near: π S² ≥ Ω d² = {:e} (R {:e}, light offset {:e})",
+                    omega as f64 * (v.center.as_dvec3() - x.as_dvec3()).length_squared(),
+                    v.radius,
+                    v.light_centroid.distance(v.centroid)
                 ));
             }
         }
     }
     for &k in &cut.discards {
         let v = tree.node(k);
-        let t = node_test64(&v, x, n, omega);
+        let t = node_test64(&v, x, n, omega, weight);
         if kept(&t) {
             return Err(format!(
                 "discarded node {k} is clearly neither below nor facing away"
@@ -837,7 +855,7 @@ pub fn semantics(
     }
     for (k, _) in traversed.iter().enumerate().filter(|(_, t)| **t) {
         let v = tree.node(k as NodeId);
-        let t = node_test64(&v, x, n, omega);
+        let t = node_test64(&v, x, n, omega, weight);
         if discardable(&t) {
             return Err(format!("traversed node {k} is clearly discardable"));
         }
@@ -882,11 +900,12 @@ pub fn first_difference(got: &[Cut], want: &[Cut]) -> Option<String> {
     ))
 }
 
-pub fn traversal(tree: &Tree, omega: f32, threshold: u32, isa: Isa) -> Result<Traversal<'_>, String> {
+pub fn traversal(tree: &Tree, omega: f32, k: f32, threshold: u32, isa: Isa) -> Result<Traversal<'_>, String> {
     let t = Traversal::new(
         tree,
         CutOptions {
             max_solid_angle: omega,
+            light_offset: k,
             hybrid_threshold: threshold,
             isa: Some(isa),
         },
@@ -905,11 +924,12 @@ pub fn all_paths_agree(
     tree: &Tree,
     receivers: &[Receiver],
     omega: f32,
+    k: f32,
     threshold: u32,
 ) -> Result<Vec<Cut>, String> {
     let mut reference: Option<Vec<Cut>> = None;
     for isa in Isa::available() {
-        let t = traversal(tree, omega, threshold, isa)?;
+        let t = traversal(tree, omega, k, threshold, isa)?;
         let scalar = t.cuts(Scheme::Scalar, receivers);
         if let Some(r) = &reference
             && let Some(d) = first_difference(&scalar, r)
@@ -1089,7 +1109,7 @@ fn shade_pipeline(
 ) -> Result<Vec<Shaded>, String> {
     use pbgi::brdf::GlossyLobe;
     use pbgi::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
-    let t = traversal(tree, omega, 2, isa)?;
+    let t = traversal(tree, omega, 0.0, 2, isa)?;
     let proto = MicroBuffer::new(res).map_err(|e| e.to_string())?;
     let mut out = Vec::with_capacity(receivers.len());
     for chunk in receivers.chunks(pbgi::LANES) {

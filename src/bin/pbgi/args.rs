@@ -121,10 +121,18 @@ pub struct Settings {
     /// Microbuffer resolution N (an N×N octahedral grid over the hemisphere).
     #[arg(long, default_value_t = RenderOptions::default().microbuffer)]
     pub microbuffer: usize,
+    /// How much a cluster's light offset (its light centroid's distance
+    /// from its area centroid) adds to its radius in the cut's test.
+    #[arg(long, default_value_t = RenderOptions::default().cut.light_offset)]
+    pub light_offset: f32,
     /// Ω of the gathers at receivers with a glossy lobe (which reads where
     /// each cluster's light is drawn, so needs finer clusters).
     #[arg(long, default_value_t = RenderOptions::default().glossy_max_solid_angle)]
     pub glossy_max_solid_angle: f32,
+    /// The light offset's weight in the cut of the gathers at receivers
+    /// with a glossy lobe.
+    #[arg(long, default_value_t = RenderOptions::default().glossy_light_offset)]
+    pub glossy_light_offset: f32,
     /// Microbuffer resolution of the gathers at receivers with a glossy lobe.
     #[arg(long, default_value_t = RenderOptions::default().glossy_microbuffer)]
     pub glossy_microbuffer: usize,
@@ -152,12 +160,14 @@ impl Settings {
         Ok(RenderOptions {
             cut: CutOptions {
                 max_solid_angle: self.max_solid_angle,
+                light_offset: self.light_offset,
                 hybrid_threshold: self.hybrid_threshold,
                 isa: parse_isa(&self.isa)?,
             },
             microbuffer: self.microbuffer,
             glossy_max_solid_angle: self.glossy_max_solid_angle,
             glossy_microbuffer: self.glossy_microbuffer,
+            glossy_light_offset: self.glossy_light_offset,
             bounces: self.bounces,
             spp,
             density: self.density.unwrap_or(RenderOptions::default().density),

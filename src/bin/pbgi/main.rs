@@ -330,14 +330,14 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
     );
     let glossy = if scene.has_glossy() && !opts.ao {
         format!(
-            " (glossy: Ω {}, microbuffer {})",
-            opts.glossy_max_solid_angle, opts.glossy_microbuffer
+            " (glossy: Ω {}, light offset {}, microbuffer {})",
+            opts.glossy_max_solid_angle, opts.glossy_light_offset, opts.glossy_microbuffer
         )
     } else {
         String::new()
     };
     println!(
-        "scheme {} on {}, Ω {}, microbuffer {}{glossy}, {} thread(s)",
+        "scheme {} on {}, Ω {}{}, microbuffer {}{glossy}, {} thread(s)",
         match out.choice {
             SchemeChoice::Auto => format!(
                 "auto ({}; single for packets under {} receivers)",
@@ -348,6 +348,11 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         },
         out.isa,
         opts.cut.max_solid_angle,
+        if opts.cut.light_offset > 0.0 {
+            format!(", light offset {}", opts.cut.light_offset)
+        } else {
+            String::new()
+        },
         opts.microbuffer,
         threads
     );
