@@ -41,15 +41,20 @@
 //! [0, 1]. Glossy radiance is `∫ L f_s cosθ dω` for the given lobe.
 //!
 //! **Choosing Ω and N.** Measured against closed-form answers in convex
-//! rooms (`cargo run --release --example exact`; the full table in
-//! `docs/exact/after-facet-units.txt`, ~10⁵ surfels, one thread), the
-//! relative RMSE of receivers mid-surface:
+//! rooms (`cargo run --release --example exact`; BENCHMARKS.md, ~10⁵
+//! surfels, one thread), the relative RMSE of receivers mid-surface:
 //!
 //! | Ω (`cut.max_solid_angle`) | N (`microbuffer`) | irradiance | glossy (α 0.3) | µs per receiver |
 //! | --- | --- | --- | --- | --- |
-//! | 0.05 (default) | 24 (default) | 0.3–1 % | 0.6–1.5 % | 150–180 |
-//! | 0.02 | 32 | 0.2 % | 0.5 % | 320–450 |
-//! | 0.01 | 32 | 0.1 % | 0.5 % | 550 |
+//! | 0.2 (the renderer's irradiance) | 14 | 0.6–1 % | 21 % | 60–100 |
+//! | 0.05 (default) | 24 (default) | 0.2–0.3 % | 0.7–4 % | 220–300 |
+//! | 0.05, `cut.light_offset` 4 (the renderer's glossy) | 24 | 0.1–0.2 % | 0.8–1.9 % | 230–350 |
+//! | 0.01 | 32 | 0.1 % | 0.5–1.3 % | 550–1000 |
+//!
+//! A glossy lobe reads where each cluster's light is drawn, not only its
+//! sum: `cut.light_offset` refines a cluster whose light lies off its
+//! centre (a small bright light in a dark ceiling) until it lies where its
+//! surface does ([`CutOptions::light_offset`]).
 //!
 //! Ω sets the error of the far field; N matters for glossy lobes (N 8
 //! gives 7 % there, whatever Ω) and little for irradiance from 16 on. Near
