@@ -253,7 +253,12 @@ fn a_small_sweep_measures_every_curve() {
         bounces: base.bounces,
     };
     let labels: Vec<&str> = opts.curves.iter().map(|c| c.label.as_str()).collect();
-    assert_eq!(labels, ["defaults", "Ω 0.02", "dense gathers"]);
+    // The second curve is at 0.4 of the defaults' Ω.
+    let small = format!(
+        "Ω {}",
+        ((f64::from(base.cut.max_solid_angle) * 0.4 * 1e4).round() / 1e4) as f32
+    );
+    assert_eq!(labels, ["defaults", small.as_str(), "dense gathers"]);
     let last = std::sync::Mutex::new(None);
     let points = error_sweep(&scene, &reference, &opts, &|p| {
         *last.lock().unwrap() = Some(p.clone())
@@ -267,7 +272,7 @@ fn a_small_sweep_measures_every_curve() {
         [
             ("defaults", 1),
             ("defaults", 4),
-            ("Ω 0.02", 4),
+            (small.as_str(), 4),
             ("dense gathers", 1),
             ("dense gathers", 4),
             (PATH_TRACER, 4),

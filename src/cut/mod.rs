@@ -107,21 +107,18 @@ pub struct Traversal<'t> {
 impl<'t> Traversal<'t> {
     /// Validates the options and resolves the instruction set.
     pub fn new(tree: &'t Tree, options: CutOptions) -> Result<Self, Error> {
-        let max_solid_angle = options.max_solid_angle;
-        if !(max_solid_angle.is_finite() && max_solid_angle >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "max_solid_angle",
-                value: max_solid_angle.to_string(),
-                expected: "a finite number ≥ 0",
-            });
-        }
-        let light_offset = options.light_offset;
-        if !(light_offset.is_finite() && light_offset >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "light_offset",
-                value: light_offset.to_string(),
-                expected: "a finite number ≥ 0",
-            });
+        let (max_solid_angle, light_offset) = (options.max_solid_angle, options.light_offset);
+        for (name, v) in [
+            ("max_solid_angle", max_solid_angle),
+            ("light_offset", light_offset),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value: v.to_string(),
+                    expected: "a finite number ≥ 0",
+                });
+            }
         }
         if options.hybrid_threshold > LANES as u32 + 1 {
             return Err(Error::InvalidParameter {

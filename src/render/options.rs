@@ -300,7 +300,7 @@ impl Default for RenderOptions {
     fn default() -> Self {
         Self {
             cut: CutOptions {
-                max_solid_angle: 0.2,
+                max_solid_angle: 0.15,
                 ..CutOptions::default()
             },
             scheme: SchemeChoice::Auto,

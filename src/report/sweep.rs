@@ -150,7 +150,9 @@ const SMALL_OMEGA_MIN_SPP: u32 = 4;
 /// 0.4× the base's at the higher ones, dense gathers at the lower ones.
 /// Curves equal to an earlier one, or left without points, are dropped.
 pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
-    let small_omega = (f64::from(base.cut.max_solid_angle) * 0.4) as f32;
+    // Rounded to 4 decimals, so the curve's label reads `Ω 0.06`, not
+    // `Ω 0.060000002`.
+    let small_omega = ((f64::from(base.cut.max_solid_angle) * 0.4 * 1e4).round() / 1e4) as f32;
     let variants = [
         (Variant::default(), spp.to_vec()),
         (
