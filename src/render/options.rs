@@ -110,12 +110,13 @@ pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderOptions {
     /// The cut's parameters: Ω, the hybrid threshold, the instruction-set
-    /// path. Ω 0.2 by default (with N 14): irradiance reads only the sum of
-    /// the clusters' light, which a cluster sends from its light centroid,
-    /// so a coarse cut costs it little (the light room's mid-wall receivers
-    /// 0.5 %, the Cornell box's indirect light 3.3 % against 2.5 % at Ω
-    /// 0.05, N 24) at a third of the time. Receivers with a glossy lobe
-    /// gather at their own Ω and N.
+    /// path. Ω 0.15 by default (with N 14): irradiance reads only the sum
+    /// of the clusters' light, which a cluster sends from its light
+    /// centroid, so a coarse cut costs it little (the Cornell box's dense
+    /// indirect light 2.94 % against 2.47 % at Ω 0.05, N 24) at 40 % of the
+    /// time. At Ω 0.2 the coverage falls short by about 1 % (the open box's
+    /// occlusion and sky light, `tests/render.rs`). Receivers with a glossy
+    /// lobe gather at their own Ω and N.
     pub cut: CutOptions,
     /// Traversal scheme.
     pub scheme: SchemeChoice,
