@@ -113,7 +113,7 @@ pub struct RenderOptions {
     /// path. Ω 0.15 by default (with N 14): irradiance reads only the sum
     /// of the clusters' light, which a cluster sends from its light
     /// centroid, so a coarse cut costs it little (the Cornell box's dense
-    /// indirect light 2.94 % against 2.47 % at Ω 0.05, N 24) at 40 % of the
+    /// indirect light 2.94 % against 2.47 % at Ω 0.05, N 24) in half the
     /// time. At Ω 0.2 the coverage falls short by about 1 % (the open box's
     /// occlusion and sky light, `tests/render.rs`). Receivers with a glossy
     /// lobe gather at their own Ω and N.
