@@ -44,7 +44,9 @@ impl Frame<'_> {
         let window = self.window();
         let w = window.width();
         let eye = self.scene.camera.origin;
-        let mut gatherers = gathers.map(Gather::gatherer);
+        // Made when a tile first has receivers for it (most tiles have no
+        // glossy ones).
+        let mut gatherers: [Option<Gatherer>; 2] = [None, None];
         let pixels = self.tile_pixels(tile);
         let spp = opts.spp as usize;
         // What camera sample `s` of pixel `k` adds, at `[k * spp + s]`: its
@@ -99,7 +101,7 @@ impl Frame<'_> {
         // Sparse gathers: a pixel's samples that gather themselves on one
         // surface share one gather (the dense render keeps every one).
         let (own, sharing) = self.share_gathers(own, &pixels, eye);
-        let e = self.gather_all(&own, &pixels, &mut acc, &mut gatherers, timers)?;
+        let e = self.gather_all(&own, &pixels, &mut acc, gathers, &mut gatherers, timers)?;
         if opts.component != Component::Direct {
             // Irradiance not gathered at the sample itself: each sample gets
             // one indirect term, whether gathered, interpolated or shared.
@@ -182,12 +184,13 @@ impl Frame<'_> {
     /// gatherer (its own Ω and N): adds each one's indirect light to
     /// `acc.adds`, and returns what each gathered (irradiance, or
     /// occlusion), in `points`' order.
-    fn gather_all(
+    fn gather_all<'g, 't>(
         &self,
         points: &[(u32, PacketPoint)],
         pixels: &[(u32, u32)],
         acc: &mut Gathered,
-        gatherers: &mut [Gatherer; 2],
+        gathers: [&'g Gather<'t>; 2],
+        gatherers: &mut [Option<Gatherer<'g, 't>>; 2],
         timers: &Timers,
     ) -> Result<Vec<Vec3>, RenderError> {
         let spp = self.opts.spp as usize;
@@ -195,11 +198,12 @@ impl Frame<'_> {
         let apart = self.glossy_apart();
         let glossy =
             |(_, pp): &(u32, PacketPoint)| apart && self.scene.materials[pp.point.material].glossy.is_some();
-        for (gatherer, lobe) in gatherers.iter_mut().zip([false, true]) {
+        for ((gatherer, gather), lobe) in gatherers.iter_mut().zip(gathers).zip([false, true]) {
             let group: Vec<usize> = (0..points.len())
                 .filter(|&i| glossy(&points[i]) == lobe)
                 .collect();
             for chunk in group.chunks(LANES) {
+                let gatherer = gatherer.get_or_insert_with(|| gather.gatherer());
                 let packet: Vec<&PacketPoint> = chunk.iter().map(|&i| &points[i].1).collect();
                 let receivers = packet
                     .iter()

@@ -496,7 +496,6 @@ impl TreeFile {
                 *x = rd.f32();
             }
         }
-        tree.derive();
         check::values(&tree)
             .and_then(|()| check::structure(&tree, n as usize))
             .map_err(|fault| {
@@ -507,6 +506,8 @@ impl TreeFile {
                 };
                 invalid(offset, fault.what)
             })?;
+        // From checked values only: finite centroids within the sphere.
+        tree.derive();
         Ok(TreeFile { bake, cloud, tree })
     }
 }

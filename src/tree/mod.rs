@@ -383,13 +383,10 @@ impl Tree {
                 sin,
                 self.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE),
             );
-            let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
-            // Both centroids lie in the sphere (or the file was refused).
-            f[field::LIGHT_OFFSET][slot] = if offset.is_finite() {
-                offset.min(2.0 * r)
-            } else {
-                0.0
-            };
+            // Both centroids lie in the sphere (built so, or checked in a
+            // file before this runs): at most `2R`, finite.
+            f[field::LIGHT_OFFSET][slot] =
+                Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
         }
     }
 
