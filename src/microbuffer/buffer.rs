@@ -46,6 +46,8 @@ pub struct MicroBuffer {
     pub(super) frags: Fragments,
     /// What the open pixels see (none: black).
     pub(super) environment: Option<Arc<Environment>>,
+    /// The composition's working memory, reused from receiver to receiver.
+    pub(super) scratch: compose::Scratch,
 }
 
 impl MicroBuffer {
@@ -69,6 +71,7 @@ impl MicroBuffer {
             frame: [Vec3::X, Vec3::Y, Vec3::Z],
             frags: Fragments::default(),
             environment: None,
+            scratch: compose::Scratch::default(),
         })
     }
 
@@ -187,14 +190,36 @@ impl MicroBuffer {
     /// Irradiance `E = ∫ L cosθ dω` (not `E/π`), from the composed pixels
     /// (`compose`: the fragments sorted per pixel, layered by depth).
     pub fn irradiance(&self, tree: &Tree) -> Vec3 {
-        self.irradiance_inline(tree)
+        let sky = self.sky();
+        let mut scratch = compose::Scratch::default();
+        compose::irradiance(
+            &self.table,
+            &self.frags,
+            tree,
+            &self.site(),
+            sky.as_ref(),
+            &mut scratch,
+        )
     }
 
     /// [`irradiance`](Self::irradiance), inlined into the caller (a clone of
-    /// a shading pipeline compiles it with its own instruction set).
+    /// a shading pipeline compiles it with its own instruction set), in the
+    /// buffer's own working memory.
     #[inline(always)]
-    pub(crate) fn irradiance_inline(&self, tree: &Tree) -> Vec3 {
-        compose::irradiance(&self.table, &self.frags, tree, &self.site(), self.sky().as_ref())
+    pub(crate) fn irradiance_inline(&mut self, tree: &Tree) -> Vec3 {
+        let site = self.site();
+        let sky = self.environment.as_deref().map(|environment| compose::Sky {
+            environment,
+            frame: self.frame,
+        });
+        compose::irradiance(
+            &self.table,
+            &self.frags,
+            tree,
+            &site,
+            sky.as_ref(),
+            &mut self.scratch,
+        )
     }
 
     /// The receiver, for the composition.
@@ -228,6 +253,7 @@ impl MicroBuffer {
             &self.site(),
             f,
             self.sky().as_ref(),
+            &mut compose::Scratch::default(),
         )
     }
 
@@ -235,13 +261,21 @@ impl MicroBuffer {
     /// hemisphere, `Σ coverage·∫cosθ dω / π` ∈ [0, 1] (`tree`: the depth
     /// intervals of the splatted nodes, which layer the fragments).
     pub fn occlusion(&self, tree: &Tree) -> f32 {
-        self.occlusion_inline(tree)
+        compose::occlusion(
+            &self.table,
+            &self.frags,
+            tree,
+            &self.site(),
+            &mut compose::Scratch::default(),
+        )
     }
 
-    /// [`occlusion`](Self::occlusion), inlined into the caller.
+    /// [`occlusion`](Self::occlusion), inlined into the caller, in the
+    /// buffer's own working memory.
     #[inline(always)]
-    pub(crate) fn occlusion_inline(&self, tree: &Tree) -> f32 {
-        compose::occlusion(&self.table, &self.frags, tree, &self.site())
+    pub(crate) fn occlusion_inline(&mut self, tree: &Tree) -> f32 {
+        let site = self.site();
+        compose::occlusion(&self.table, &self.frags, tree, &site, &mut self.scratch)
     }
 
     /// Fragments left by the splats so far (for counters and tests).

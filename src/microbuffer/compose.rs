@@ -104,13 +104,30 @@ pub(crate) struct Site {
     pub frame: [Vec3; 3],
 }
 
-/// The composed pixels of one receiver: per pixel the effective coverage
-/// and the radiance it lets through.
-pub(crate) struct Composed {
+/// The composition's working memory, kept by a microbuffer from one
+/// receiver to the next: a receiver's composition allocated its nine arrays
+/// anew each time (and grew three of them by doubling), a tenth of the
+/// 16-lane pipeline's time in the allocator. Holds no state between
+/// receivers: every array is cleared or overwritten before it is read.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Scratch {
+    /// One shape per splat (its fragments are consecutive), and the
+    /// facets of the mixed ones.
+    shapes: Vec<Packed>,
+    mixed: Vec<Facets>,
+    /// Per fragment: its splat's shape.
+    shape_of: Vec<u32>,
+    /// Per pixel: where its bucket starts (and the next free slot).
+    start: Vec<u32>,
+    next: Vec<u32>,
+    /// The fragments bucketed by pixel.
+    sorted: Vec<Sorted>,
+    /// One pixel's fragments at its sub-samples.
+    seen: Vec<(F32s, F32s, M32s, u32)>,
+    /// The composed pixels: per pixel the effective coverage and the
+    /// radiance it lets through (empty when only coverage was asked for).
     pub cover: Vec<f32>,
     pub radiance: Vec<Vec3>,
-    /// The brightest radiance among the fragments, per channel.
-    pub brightest: Vec3,
 }
 
 /// Sums the lanes in lane order, as a fraction of the pixel.
@@ -124,18 +141,46 @@ fn mean(v: F32s) -> f32 {
 }
 
 /// Composes every pixel of `t` from `frags` (in any order), seen from
-/// `site`. `radiance`: also sum the nodes' radiance (occlusion needs none).
+/// `site`, into `s.cover` (and `s.radiance`); returns the brightest
+/// radiance among the fragments, per channel. `radiance`: also sum the
+/// nodes' radiance (occlusion needs none).
 #[inline(always)]
-pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, radiance: bool) -> Composed {
+pub(crate) fn compose(
+    t: &Table,
+    frags: &Fragments,
+    tree: &Tree,
+    site: &Site,
+    radiance: bool,
+    s: &mut Scratch,
+) -> Vec3 {
     let (pixels, n) = (t.dir.len(), frags.len());
-    // One shape per splat (its fragments are consecutive).
-    let mut shapes: Vec<Packed> = Vec::new();
-    let mut mixed: Vec<Facets> = Vec::new();
-    let mut shape_of = vec![0u32; n];
+    let Scratch {
+        shapes,
+        mixed,
+        shape_of,
+        start,
+        next,
+        sorted,
+        seen,
+        cover: out_cover,
+        radiance: out_radiance,
+    } = s;
+    // One shape per splat (its fragments are consecutive). With the
+    // radiance, the brightest the nodes hold: their own radiance, not the
+    // radiance they show (a cluster's light-centroid scale, `locate`, may
+    // show more than its surfels send, which the irradiance's bound must
+    // not follow).
+    shapes.clear();
+    mixed.clear();
+    shape_of.clear();
+    let mut brightest = Vec3::ZERO;
     let mut last = None;
-    for (of, &key) in shape_of.iter_mut().zip(&frags.key) {
+    for &key in &frags.key {
         let node = (key & 0xFFFF_FFFF) as u32;
         if last != Some(node) {
+            if radiance {
+                brightest = brightest.max(brightest_of(tree, node));
+            }
             let index = match facets(tree, node, site.position, &site.frame) {
                 Some(f) => {
                     mixed.push(f);
@@ -147,44 +192,32 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
             shapes.push(shape.pack());
             last = Some(node);
         }
-        *of = shapes.len() as u32 - 1;
+        shape_of.push(shapes.len() as u32 - 1);
     }
     // Bucket by pixel (a counting sort: O(n)).
-    let mut start = vec![0u32; pixels + 1];
+    start.clear();
+    start.resize(pixels + 1, 0);
     for &p in &frags.pixel {
         start[p as usize + 1] += 1;
     }
     for p in 0..pixels {
         start[p + 1] += start[p];
     }
-    let mut next = start.clone();
-    let mut sorted: Vec<Sorted> = vec![(0, 0); n];
+    next.clear();
+    next.extend_from_slice(start);
+    sorted.clear();
+    sorted.resize(n, (0, 0));
     for i in 0..n {
         let slot = &mut next[frags.pixel[i] as usize];
         let node = frags.key[i] & 0xFFFF_FFFF;
         sorted[*slot as usize] = (node << 32 | u64::from(frags.cover[i].to_bits()), i as u32);
         *slot += 1;
     }
-    let mut out = Composed {
-        cover: vec![0.0; pixels],
-        radiance: vec![Vec3::ZERO; if radiance { pixels } else { 0 }],
-        brightest: Vec3::ZERO,
-    };
-    if radiance {
-        // The nodes' own radiance, not the radiance they show: a cluster's
-        // light-centroid scale (`locate`) may show more than its surfels
-        // send, which the irradiance's bound must not follow.
-        let mut last = u32::MAX;
-        for &key in &frags.key {
-            let node = (key & 0xFFFF_FFFF) as u32;
-            if node != last {
-                out.brightest = out.brightest.max(brightest_of(tree, node));
-                last = node;
-            }
-        }
-    }
+    out_cover.clear();
+    out_cover.resize(pixels, 0.0);
+    out_radiance.clear();
+    out_radiance.resize(if radiance { pixels } else { 0 }, Vec3::ZERO);
     let zero = F32s::splat(0.0);
-    let mut seen: Vec<(F32s, F32s, M32s, u32)> = Vec::new();
     for p in 0..pixels {
         let bucket = &mut sorted[start[p] as usize..start[p + 1] as usize];
         if bucket.is_empty() {
@@ -216,7 +249,7 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
         let (mut front, mut behind) = (zero, zero);
         let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
         let mut hidden = M32s::splat(false);
-        for &(cover, near, hide, i) in &seen {
+        for &(cover, near, hide, i) in seen.iter() {
             let in_front = near.simd_le(reach);
             hidden |= hide & in_front;
             let a = F32s::select(in_front, cover, zero);
@@ -236,16 +269,16 @@ pub(crate) fn compose(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, ra
             zero,
             (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero),
         );
-        out.cover[p] = mean(front + through * behind);
+        out_cover[p] = mean(front + through * behind);
         if radiance {
-            out.radiance[p] = Vec3::new(
+            out_radiance[p] = Vec3::new(
                 mean(lf[0] + through * lb[0]),
                 mean(lf[1] + through * lb[1]),
                 mean(lf[2] + through * lb[2]),
             );
         }
     }
-    out
+    brightest
 }
 /// The brightest radiance node `node` holds: its mean, or a mixed
 /// cluster's brightest facet.
@@ -269,19 +302,20 @@ fn brightest_of(tree: &Tree, node: u32) -> Vec3 {
 /// hemisphere, and where that radiance is uniform the exact answer is the
 /// bound itself.
 #[inline(always)]
-pub(crate) fn irradiance(t: &Table, frags: &Fragments, tree: &Tree, site: &Site, sky: Option<&Sky>) -> Vec3 {
-    // Taken apart: the drop of the whole would be out-of-line glue,
-    // compiled for the baseline target (scripts/check-asm.sh).
-    let Composed {
-        cover,
-        radiance,
-        brightest,
-    } = compose(t, frags, tree, site, true);
+pub(crate) fn irradiance(
+    t: &Table,
+    frags: &Fragments,
+    tree: &Tree,
+    site: &Site,
+    sky: Option<&Sky>,
+    scratch: &mut Scratch,
+) -> Vec3 {
+    let mut brightest = compose(t, frags, tree, site, true, scratch);
+    let (cover, radiance) = (&scratch.cover, &scratch.radiance);
     let mut e = Vec3::ZERO;
     for (l, w) in radiance.iter().zip(&t.cos_weight) {
         e += *l * *w;
     }
-    let mut brightest = brightest;
     if let Some(sky) = sky {
         // Unclamped per pixel: the layers' coverage overshoots one in some
         // pixels as it falls short in others (splats do not tile exactly),
@@ -316,11 +350,16 @@ impl Sky<'_> {
 
 /// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
 #[inline(always)]
-pub(crate) fn occlusion(t: &Table, frags: &Fragments, tree: &Tree, site: &Site) -> f32 {
-    let Composed { cover, radiance, .. } = compose(t, frags, tree, site, false);
-    drop(radiance);
+pub(crate) fn occlusion(
+    t: &Table,
+    frags: &Fragments,
+    tree: &Tree,
+    site: &Site,
+    scratch: &mut Scratch,
+) -> f32 {
+    compose(t, frags, tree, site, false, scratch);
     let mut o = 0.0f32;
-    for (c, w) in cover.iter().zip(&t.cos_weight) {
+    for (c, w) in scratch.cover.iter().zip(&t.cos_weight) {
         o += c * w;
     }
     (o * std::f32::consts::FRAC_1_PI).min(1.0)
@@ -336,8 +375,9 @@ pub(crate) fn reflected(
     site: &Site,
     f: impl Fn(usize) -> Vec3,
     sky: Option<&Sky>,
+    c: &mut Scratch,
 ) -> Vec3 {
-    let c = compose(t, frags, tree, site, true);
+    compose(t, frags, tree, site, true, c);
     let mut e = Vec3::ZERO;
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {

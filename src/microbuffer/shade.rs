@@ -378,7 +378,7 @@ fn packet_body(
             }
         }
     }
-    for (mb, o) in bufs.iter().zip(out.iter_mut()) {
+    for (mb, o) in bufs.iter_mut().zip(out.iter_mut()) {
         *o = convolve(mb, tree, what);
     }
 }
@@ -453,7 +453,7 @@ impl BoxLanes {
 /// The convolution `what` of one buffer: the composition both pipelines
 /// share (`compose`).
 #[inline(always)]
-fn convolve(mb: &MicroBuffer, tree: &Tree, what: Convolution) -> Vec3 {
+fn convolve(mb: &mut MicroBuffer, tree: &Tree, what: Convolution) -> Vec3 {
     match what {
         Convolution::Irradiance => mb.irradiance_inline(tree),
         Convolution::Occlusion => Vec3::splat(mb.occlusion_inline(tree)),
