@@ -90,49 +90,29 @@ const FACET: usize = 11;
 /// centroid's distance, `tanθ` (as [`Shape`]'s) and its reach.
 pub(crate) type Facets = [f32; FACETS * FACET];
 
-/// How much of a mixed node's area its facets must show face-on
-/// (`Σ|A·n̄| / A`) to be drawn as flat pieces: a box's corner shows all
-/// of it; a column's or an arch's cluster, whose facets are curved (or
-/// hold the normals a fourth facet would have had), shows less, and its
-/// disks would leave gaps where its surface is.
-const FLAT: f32 = 0.9;
-
 /// The facets of node `node` seen from `position` with local frame `frame`
-/// (`Tree::cluster`, `plane`), if it is drawn as them: a mixed node whose
-/// facets are flat (else it is one round cone at its centre, `±R` deep).
+/// (`Tree::planes`), if it is drawn as them: a mixed node whose facets are
+/// flat (else it is one round cone at its centre, `±R` deep).
 #[inline(always)]
 pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3]) -> Option<Facets> {
-    let rec = &tree.splat[node as usize];
-    if rec.kind != MIXED {
+    if tree.splat[node as usize].kind != MIXED {
         return None;
     }
-    let cluster = &tree.cluster[tree.facets_of[node as usize] as usize];
-    let mut shown = 0.0;
-    for f in &cluster.facet {
-        shown += Vec3::new(f[0], f[1], f[2]).length();
-    }
-    if shown < FLAT {
+    let planes = &tree.planes[tree.facets_of[node as usize] as usize];
+    if !planes.flat {
         return None;
     }
-    let r = tree.bounding_radius(node);
-    let centre = Vec3::from_array(rec.centroid);
     let mut out = [0.0; FACETS * FACET];
-    for ((f, p), o) in cluster
-        .facet
-        .iter()
-        .zip(&cluster.plane)
-        .zip(out.chunks_exact_mut(FACET))
-    {
-        let an = Vec3::new(f[0], f[1], f[2]);
-        let n = an.normalize_or_zero();
+    for (f, o) in planes.facet.iter().zip(out.chunks_exact_mut(FACET)) {
+        let n = Vec3::new(f[0], f[1], f[2]);
         let m = Vec3::new(n.dot(frame[0]), n.dot(frame[1]), n.dot(frame[2]));
-        let x = centre + Vec3::new(p[0], p[1], p[2]) * r - position;
+        let x = Vec3::new(f[3], f[4], f[5]) - position;
         let v = Vec3::new(x.dot(frame[0]), x.dot(frame[1]), x.dot(frame[2]));
         let (d, mv) = (v.length(), m.dot(v));
         let c = if d > 0.0 { (mv / d).abs().max(1e-3) } else { 1.0 };
         // Seen from behind its plane it is hit on no sub-sample's front:
         // no disk to test.
-        let area = if mv < 0.0 { rec.area * an.length() } else { 0.0 };
+        let area = if mv < 0.0 { f[6] } else { 0.0 };
         o.copy_from_slice(&[
             m.x,
             m.y,
@@ -144,7 +124,7 @@ pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3
             area * std::f32::consts::FRAC_1_PI,
             d,
             (1.0 - c * c).max(0.0).sqrt() / c,
-            p[3] * r,
+            f[7],
         ]);
     }
     Some(out)
@@ -450,7 +430,19 @@ fn spread(member: M32s, cover: f32) -> Option<F32s> {
     }
     Some(F32s::select(
         member,
-        F32s::splat(cover * (SAMPLES as f32 / count as f32)),
+        F32s::splat(cover * SHARE[count as usize]),
         F32s::splat(0.0),
     ))
 }
+
+/// `SAMPLES / count` for every count of sub-samples, the same IEEE
+/// quotient as at run time (a division per fragment saved).
+const SHARE: [f32; SAMPLES + 1] = {
+    let mut s = [0.0; SAMPLES + 1];
+    let mut k = 1;
+    while k <= SAMPLES {
+        s[k] = SAMPLES as f32 / k as f32;
+        k += 1;
+    }
+    s
+};

@@ -5,7 +5,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{BuildNode, Cluster, FACETS};
+use super::{BuildNode, Cluster, FACETS, SplatRecord};
 use crate::points::Surfel;
 
 /// A surfel joins the facet whose first normal is nearest if within this
@@ -154,4 +154,48 @@ fn round_up(x: f64) -> f32 {
 fn round_down(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) > x { f.next_down() } else { f }
+}
+
+/// How much of a mixed node's area its facets must show face-on
+/// (`Σ|A·n̄| / A`) to be drawn as flat pieces: a box's corner shows all
+/// of it; a column's or an arch's cluster, whose facets are curved (or
+/// hold the normals a fourth facet would have had), shows less, and its
+/// disks would leave gaps where its surface is.
+const FLAT: f32 = 0.9;
+
+/// What the microbuffer reads of a mixed cluster's facets that depends on
+/// the node alone, derived once per tree rather than for every receiver
+/// that splats it (they were a tenth of the composition's time).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct FacetPlanes {
+    /// Whether the facets are flat ([`FLAT`]): drawn as their disks, else
+    /// the node is one round cone.
+    pub flat: bool,
+    /// Per facet: its unit normal (x, y, z), its plane's centroid in world
+    /// space (x, y, z), its area `A·|A·n̄/A|` and how far its surfels leave
+    /// its plane (both in world units).
+    pub facet: [[f32; 8]; FACETS],
+}
+
+impl FacetPlanes {
+    /// The facets of the mixed node `rec` with bounding radius `r` and
+    /// facets `cluster`.
+    pub(crate) fn of(rec: &SplatRecord, r: f32, cluster: &Cluster) -> FacetPlanes {
+        let mut shown = 0.0;
+        for f in &cluster.facet {
+            shown += Vec3::new(f[0], f[1], f[2]).length();
+        }
+        let centre = Vec3::from_array(rec.centroid);
+        let mut out = FacetPlanes {
+            flat: !(shown < FLAT),
+            facet: [[0.0; 8]; FACETS],
+        };
+        for ((f, p), o) in cluster.facet.iter().zip(&cluster.plane).zip(&mut out.facet) {
+            let an = Vec3::new(f[0], f[1], f[2]);
+            let n = an.normalize_or_zero();
+            let x = centre + Vec3::new(p[0], p[1], p[2]) * r;
+            *o = [n.x, n.y, n.z, x.x, x.y, x.z, rec.area * an.length(), p[3] * r];
+        }
+        out
+    }
 }

@@ -21,6 +21,7 @@ use glam::Vec3;
 use crate::points::{PointCloud, Surfel};
 
 mod bound;
+pub(crate) use bound::FacetPlanes;
 mod check;
 pub mod file;
 
@@ -272,8 +273,9 @@ pub struct Tree {
     /// Per node: the index of its facets in `cluster` ([`MIXED`] nodes
     /// only; `u32::MAX` for the others, which never read them).
     pub(crate) facets_of: Vec<u32>,
-    /// The facets of the [`MIXED`] nodes.
+    /// The facets of the [`MIXED`] nodes, and what is derived of them.
     pub(crate) cluster: Vec<Cluster>,
+    pub(crate) planes: Vec<FacetPlanes>,
     depth: u32,
 }
 
@@ -372,6 +374,7 @@ impl Tree {
     /// each node's light offset `|l − c|` (`l`, `c` its light and area
     /// centroids; [`crate::CutOptions::light_offset`]).
     pub(crate) fn derive(&mut self) {
+        self.planes = vec![FacetPlanes::default(); self.cluster.len()];
         for k in 0..self.splat.len() as u32 {
             let (p, slot) = NodeArrays::locate(k);
             let f = &mut self.nodes.pairs[p].f;
@@ -383,6 +386,9 @@ impl Tree {
                 sin,
                 self.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE),
             );
+            if let Some(c) = self.cluster.get(cluster as usize) {
+                self.planes[cluster as usize] = FacetPlanes::of(rec, r, c);
+            }
             // Both centroids lie in the sphere (built so, or checked in a
             // file before this runs): at most `2R`, finite.
             f[field::LIGHT_OFFSET][slot] =
