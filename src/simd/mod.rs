@@ -4,7 +4,7 @@
 //! * [`LANES`], [`F32s`], [`M32s`] and the lane type `Real` (one `f32` or 16
 //!   of them, with the same IEEE operations), so each kernel is written once
 //!   and the scalar reference runs the same arithmetic as the lanes;
-//! * lane-mask helpers (`lane_mask`, `set_bits`);
+//! * lane-mask helpers (`lane_mask`, `set_bits`) and the fixed-order `sum`;
 //! * [`Isa`] (`isa`): the instruction-set paths, their detection and
 //!   `PBGI_ISA`;
 //! * `dispatch`: one kernel trait and one `multiversion` dispatch, which
@@ -19,6 +19,7 @@ mod isa;
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 use std::simd::prelude::*;
+use std::simd::simd_swizzle;
 
 pub use isa::{Isa, IsaError};
 
@@ -149,6 +150,19 @@ impl Real for F32s {
     fn lt(self, o: Self) -> M32s {
         self.simd_lt(o)
     }
+}
+
+/// The lanes' sum as a fixed tree of lane-wise additions (halves, then
+/// quarters, …): the same IEEE operations on every instruction set, where
+/// `reduce_sum` leaves the order to the target, and four dependent
+/// additions deep instead of the sixteen of a sum lane after lane.
+#[inline(always)]
+pub(crate) fn sum(v: F32s) -> f32 {
+    let h: Simd<f32, 8> =
+        simd_swizzle!(v, [0, 1, 2, 3, 4, 5, 6, 7]) + simd_swizzle!(v, [8, 9, 10, 11, 12, 13, 14, 15]);
+    let q: Simd<f32, 4> = simd_swizzle!(h, [0, 1, 2, 3]) + simd_swizzle!(h, [4, 5, 6, 7]);
+    let e: Simd<f32, 2> = simd_swizzle!(q, [0, 1]) + simd_swizzle!(q, [2, 3]);
+    e[0] + e[1]
 }
 
 /// The mask of the first `count` lanes.
