@@ -236,7 +236,7 @@ pub(crate) fn compose(
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
         for &(_, i) in bucket.iter() {
             let shape = Shape::unpack(&shapes[shape_of[i as usize] as usize]);
-            let l = lanes(&shape, &px, frags.cover[i as usize], &mixed);
+            let l = lanes(&shape, &px, frags.cover[i as usize], mixed);
             let nearer = (zero.simd_lt(l.cover) | l.hide) & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);
             reach = F32s::select(nearer, l.far, reach);

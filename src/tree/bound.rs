@@ -187,7 +187,7 @@ impl FacetPlanes {
         }
         let centre = Vec3::from_array(rec.centroid);
         let mut out = FacetPlanes {
-            flat: !(shown < FLAT),
+            flat: shown >= FLAT,
             facet: [[0.0; 8]; FACETS],
         };
         for ((f, p), o) in cluster.facet.iter().zip(&cluster.plane).zip(&mut out.facet) {
