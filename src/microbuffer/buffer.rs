@@ -208,10 +208,9 @@ impl MicroBuffer {
     #[inline(always)]
     pub(crate) fn irradiance_inline(&mut self, tree: &Tree) -> Vec3 {
         let site = self.site();
-        let sky = self.environment.as_deref().map(|environment| compose::Sky {
-            environment,
-            frame: self.frame,
-        });
+        // The sky from the fields, not `sky()`: that would borrow the whole
+        // buffer, whose working memory the composition writes.
+        let sky = compose::Sky::of(self.environment.as_deref(), self.frame);
         compose::irradiance(
             &self.table,
             &self.frags,
@@ -234,10 +233,7 @@ impl MicroBuffer {
     /// What the open pixels see.
     #[inline(always)]
     fn sky(&self) -> Option<compose::Sky<'_>> {
-        Some(compose::Sky {
-            environment: self.environment.as_deref()?,
-            frame: self.frame,
-        })
+        compose::Sky::of(self.environment.as_deref(), self.frame)
     }
 
     /// Glossy reflection towards `wo` (world, unit):

@@ -336,7 +336,17 @@ pub(crate) struct Sky<'a> {
     pub frame: [Vec3; 3],
 }
 
-impl Sky<'_> {
+impl<'a> Sky<'a> {
+    /// What a receiver with local frame `frame` sees through its open
+    /// pixels: `environment`, or nothing (black).
+    #[inline(always)]
+    pub(crate) fn of(environment: Option<&'a Environment>, frame: [Vec3; 3]) -> Option<Self> {
+        Some(Sky {
+            environment: environment?,
+            frame,
+        })
+    }
+
     /// The environment's radiance toward pixel `p`'s centre.
     #[inline(always)]
     fn at(&self, t: &Table, p: usize) -> Vec3 {
