@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::buffer::{Fragments, MicroBuffer, key};
 use super::locate::{Located, NodeSplat};
-use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
+use super::plan::{ConePlan, DiskPlan, SmallPlan, narrow, pixel_of, plan_cone, plan_disk, plan_small};
 use super::table::Table;
 use crate::simd::Real;
 use crate::tree::{LEAF, NodeId, SplatRecord};
@@ -41,8 +41,10 @@ impl MicroBuffer {
     #[inline(always)]
     pub(crate) fn draw_small(&mut self, plan: &SmallPlan<f32>, key: u64, radiance: [f32; 3]) {
         for k in 0..4 {
-            let cover = f32::select(plan.w[k] > 0.0, plan.cover[k], 0.0).min_of(1.0);
-            self.frags.push(plan.p[k] as usize, key, cover, radiance);
+            if plan.w[k] > 0.0 {
+                self.frags
+                    .push(plan.p[k] as usize, key, plan.cover[k].min_of(1.0), radiance);
+            }
         }
     }
 
@@ -111,7 +113,8 @@ impl MicroBuffer {
         if l.omega < pixel_omega {
             // Also below the horizon, where it adds nothing (cos 0): a cone
             // there would put a pixel's worth at the horizon.
-            let plan = plan_small(t, l.x, l.y, l.omega * cos);
+            let narrow = narrow(t, rec.kind == LEAF, rec.area, l.omega, l.d);
+            let plan = plan_small(t, l.x, l.y, l.omega * cos, narrow);
             self.draw_small(&plan, key, radiance);
         } else if rec.kind == LEAF {
             let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
@@ -119,7 +122,7 @@ impl MicroBuffer {
             // the receiver's plane: a leaf missing every centre gets a pixel at most.
             if !self.draw_disk(&plan, node, radiance) && visible {
                 let t = &*self.table;
-                let plan = plan_small(t, l.x, l.y, pixel_omega * cos);
+                let plan = plan_small(t, l.x, l.y, pixel_omega * cos, false);
                 self.draw_small(&plan, key, radiance);
             }
         } else {

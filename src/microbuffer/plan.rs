@@ -3,7 +3,8 @@
 //!
 //! * smaller than the pixel its centre falls in (`Ω < ΔΩ`): spread over the
 //!   2×2 pixels around the centre with bilinear weights, each covered by its
-//!   weight times `Ω/ΔΩ` ([`plan_small`]);
+//!   weight times `Ω/ΔΩ`, or, narrower than half a sub-sample, whole in
+//!   that pixel ([`plan_small`]);
 //! * a larger cluster: a soft cone ([`plan_cone`]);
 //! * a larger leaf: its disk, ray-traced at the pixel centres of a box
 //!   ([`plan_disk`]; a disk whose front no pixel's ray can face is known to
@@ -128,17 +129,54 @@ fn share<V: Real>(w: V, omega_cos: V, cos_weight: V) -> V {
     )
 }
 
+/// The chord radius² of a splat's footprint: a leaf's disk of radius² `r2`
+/// at distance `d` spans at most `r2 / (d − r)²`; a cluster's cone, of
+/// projected solid angle `π·r2`, `r2`.
+#[inline(always)]
+pub(crate) fn chord2<V: Real>(leaf: bool, r2: V, d: V) -> V {
+    if leaf {
+        let near = (d - r2.sqrt()).max_of(V::splat(0.0));
+        r2 / (near * near)
+    } else {
+        r2
+    }
+}
+
+/// Whether a splat of `area` and projected solid angle `omega` at distance
+/// `d` has a footprint under half the smallest sub-sample across ([`chord2`]
+/// of a leaf's disk, of a cluster's cone), for [`plan_small`].
+#[inline(always)]
+pub(crate) fn narrow<V: Real>(t: &Table, leaf: bool, area: V, omega: V, d: V) -> V::Mask {
+    let r2 = if leaf { area } else { omega } * V::splat(std::f32::consts::FRAC_1_PI);
+    chord2(leaf, r2, d).lt(V::splat(t.half_sample * t.half_sample))
+}
+
 /// Spreads projected solid angle `omega_cos` (`Ω·cosθ`) at `(x, y)` over
 /// the 2×2 pixels around it (bilinear weights between pixel centres, clamped
 /// into the grid): pixel `k` is covered by `w_k·Ω·cosθ / ∫_k cos`, so the
 /// splat adds exactly its projected solid angle to the convolution.
+///
+/// Where the footprint is `narrow` (under half a sub-sample across, so that
+/// `samples` puts it whole at one sub-sample), all of it goes to the pixel
+/// its centre falls in. Spread, its part in a neighbouring pixel went to
+/// the sub-sample there nearest its centre, up to a pixel from where it is;
+/// where a nearer surface begins that close (a room's corner seen from
+/// inside, a silhouette), that part lay behind it and was lost: a closed
+/// room's mid-wall occlusion, leaves only, N 14, −0.53 % (−0.14 % with it
+/// whole in its pixel).
 #[inline(always)]
-pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V) -> SmallPlan<V> {
+pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V, narrow: V::Mask) -> SmallPlan<V> {
     let (zero, half, one) = (V::splat(0.0), V::splat(0.5), V::splat(1.0));
     let (n, last) = (V::splat(t.n as f32), V::splat((t.n - 1) as f32));
     let (gx, gy) = (x - half, y - half);
     let (x0, y0) = (gx.floor(), gy.floor());
     let (tx, ty) = (gx - x0, gy - y0);
+    // Narrow: the weight 1 on the corner whose pixel holds the centre
+    // (`pixel_of`: column ⌊x⌋ is `x0 + 1` from `tx = ½` on).
+    let (tx, ty) = (
+        V::select(narrow, V::select(half.le(tx), one, zero), tx),
+        V::select(narrow, V::select(half.le(ty), one, zero), ty),
+    );
     let (c0, c1) = (x0.max_of(zero).min_of(last), (x0 + one).max_of(zero).min_of(last));
     let (r0, r1) = (y0.max_of(zero).min_of(last), (y0 + one).max_of(zero).min_of(last));
     let p = [r0 * n + c0, r0 * n + c1, r1 * n + c0, r1 * n + c1];

@@ -7,6 +7,7 @@ use std::simd::prelude::*;
 
 use glam::Vec3;
 
+use super::plan::chord2;
 use crate::simd::{F32s, LANES, M32s, Real};
 use crate::tree::{FACETS, LEAF, MIXED, NodeId, Tree, field};
 
@@ -165,12 +166,7 @@ impl Shape {
         let half = 0.5 * res as f32;
         let c = m.dot(w).abs().max(1e-3);
         // The footprint's chord radius² (a disk's at most `r²/(d − r)²`).
-        let footprint = if rec.kind == LEAF {
-            let near = (d - r2.sqrt()).max(0.0);
-            r2 / (near * near)
-        } else {
-            r2
-        };
+        let footprint = chord2(rec.kind == LEAF, r2, d);
         Shape {
             small: footprint < half_sample * half_sample,
             kind: rec.kind,

@@ -19,7 +19,9 @@ use glam::Vec3;
 
 use super::buffer::{MicroBuffer, key};
 use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
-use super::plan::{ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small};
+use super::plan::{
+    ConePlan, DiskPlan, PixelBox, SmallPlan, narrow, pixel_of, plan_cone, plan_disk, plan_small,
+};
 use super::table::Table;
 use crate::cut::CutSink;
 use crate::error::Error;
@@ -319,7 +321,14 @@ fn packet_body(
         // (An `if`, not `bool::then` with a closure: an out-of-line closure
         // would be compiled for the baseline target, not this clone.)
         let small_plan = if small != 0 || (leaf && large != 0) {
-            let plan = plan_small(t, l.x, l.y, F32s::select(small_m, l.omega, pixel_omega) * cos);
+            let narrow = narrow(t, leaf, s.area, l.omega, l.d) & small_m;
+            let plan = plan_small(
+                t,
+                l.x,
+                l.y,
+                F32s::select(small_m, l.omega, pixel_omega) * cos,
+                narrow,
+            );
             Some(SmallWrites::new(&plan, l.d, node, &rad))
         } else {
             None
@@ -384,13 +393,14 @@ fn packet_body(
 }
 
 /// A small-splat plan of 16 lanes reduced to the fragments it leaves: per
-/// corner and lane the pixel, the key and the coverage (0 where the corner
-/// has no weight), all worked out in the lanes, so that each receiver's part
-/// is four appends (the scalar pipeline's `draw_small`, bit for bit).
+/// corner and lane the pixel, the key, the coverage and whether the corner
+/// has weight, all worked out in the lanes, so that each receiver's part is
+/// up to four appends (the scalar pipeline's `draw_small`, bit for bit).
 struct SmallWrites {
     p: [[u32; LANES]; 4],
     key: [u64; LANES],
     cover: [[f32; LANES]; 4],
+    weighted: [u16; 4],
     radiance: [[f32; LANES]; 3],
 }
 
@@ -403,12 +413,13 @@ impl SmallWrites {
             p: [[0; LANES]; 4],
             key: key.to_array(),
             cover: [[0.0; LANES]; 4],
+            weighted: [0; 4],
             radiance: *radiance,
         };
         for k in 0..4 {
-            let m = zero.lt(plan.w[k]);
             w.p[k] = plan.p[k].cast::<u32>().to_array();
-            w.cover[k] = F32s::select(m, plan.cover[k], zero).min_of(one).to_array();
+            w.cover[k] = plan.cover[k].min_of(one).to_array();
+            w.weighted[k] = zero.lt(plan.w[k]).to_bitmask() as u16;
         }
         w
     }
@@ -420,12 +431,14 @@ impl MicroBuffer {
     fn draw_small_lane(&mut self, sw: &SmallWrites, i: usize) {
         let r = &sw.radiance;
         for k in 0..4 {
-            self.frags.push(
-                sw.p[k][i] as usize,
-                sw.key[i],
-                sw.cover[k][i],
-                [r[0][i], r[1][i], r[2][i]],
-            );
+            if sw.weighted[k] >> i & 1 != 0 {
+                self.frags.push(
+                    sw.p[k][i] as usize,
+                    sw.key[i],
+                    sw.cover[k][i],
+                    [r[0][i], r[1][i], r[2][i]],
+                );
+            }
         }
     }
 }
