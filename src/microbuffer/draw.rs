@@ -114,7 +114,7 @@ impl MicroBuffer {
             // Also below the horizon, where it adds nothing (cos 0): a cone
             // there would put a pixel's worth at the horizon.
             let narrow = narrow(t, rec.kind == LEAF, rec.area, l.omega, l.d);
-            let plan = plan_small(t, l.x, l.y, l.omega * cos, narrow);
+            let plan = plan_small(t, l.x, l.y, l.projected, narrow);
             self.draw_small(&plan, key, radiance);
         } else if rec.kind == LEAF {
             let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
@@ -127,7 +127,7 @@ impl MicroBuffer {
             }
         } else {
             let plan = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
-            let target = f32::select(visible, l.omega * cos, 0.0);
+            let target = f32::select(visible, l.projected, 0.0);
             self.draw_cone(Vec3::new(l.wx, l.wy, l.wz), &plan, key, target, radiance);
         }
     }

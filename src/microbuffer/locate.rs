@@ -140,6 +140,9 @@ pub(crate) struct Located<V: Real> {
     pub valid: V::Mask,
     pub d: V,
     pub omega: V,
+    /// What it covers of the convolution, `∫cosθ dω`: `Ω·cosθ` at its
+    /// centre, a mixed node's `Σ A·G` over its facets at their centroids.
+    pub projected: V,
     pub radiance: [V; 3],
     pub wx: V,
     pub wy: V,
@@ -199,44 +202,71 @@ pub(crate) fn locate<V: Real>(
     let (dx, dy, dz) = (vx / d, vy / d, vz / d);
     let zero = V::splat(0.0);
     let mean = light.radiance;
-    // A mixed node's facets' `max(0, −n̄·ω)` toward its centroid.
+    let n = [f.nx, f.ny, f.nz];
+    // A mixed node's facets' `max(0, −n̄·ω)` toward its centroid, and each
+    // facet's `G` at its own area centroid (times its share of the area).
     let mut facing = [zero; 3];
-    let (raw, radiance) = if light.kind == MIXED {
+    let mut at_facet = [zero; 3];
+    let (raw, radiance, sent_at_facets) = if light.kind == MIXED {
         // Each facet's `A·max(0, −n̄·ω)` as a fraction of the node's area (at
         // most 1, so `L·w` cannot overflow), and its radiance weighted by its
-        // share `w / Σw` of the projected area (a share, not `w`: `L·w`
+        // share `w / Σw` of what the facets send (a share, not `w`: `L·w`
         // underflowed into subnormals for a dim facet a small part of a
         // huge node, and the mean came out 0.05 % above the brightest).
-        let w = &mut facing;
-        let mut area = zero;
-        for (w, f) in w.iter_mut().zip(&light.cluster.facet) {
-            let facing = -(V::splat(f[0]) * dx + V::splat(f[1]) * dy + V::splat(f[2]) * dz);
+        //
+        // What the node sends is `Σ A·G` over its facets, each at its own
+        // area centroid: `G` at the node's centroid made a facet rising from
+        // the receiver's own plane (a room's corner, a wall's foot) look as
+        // low as that centroid, halfway down into the receiver's own wall,
+        // and its coverage 1.5 % of the mid-wall occlusion short at Ω 0.15
+        // (its light was made good by the light centroid's scale, below).
+        let r = V::splat(light.radius);
+        let (mut area, mut total) = (zero, zero);
+        for ((w, g), (f, c)) in facing
+            .iter_mut()
+            .zip(at_facet.iter_mut())
+            .zip(light.cluster.facet.iter().zip(&light.cluster.plane))
+        {
+            let m = [V::splat(f[0]), V::splat(f[1]), V::splat(f[2])];
+            let facing = -(m[0] * dx + m[1] * dy + m[2] * dz);
             *w = facing.max_of(zero);
             area = area + *w;
+            let u = [
+                vx + V::splat(c[0]) * r,
+                vy + V::splat(c[1]) * r,
+                vz + V::splat(c[2]) * r,
+            ];
+            *g = transfer(m, u, n);
+            total = total + *g;
         }
-        let some = zero.lt(area);
+        // Shares of what the facets send; of their projected area where
+        // they send nothing (the node then adds nothing but its depth).
+        let sends = zero.lt(total);
         // A division per facet: `1/Σw` overflows for a subnormal `Σw`,
         // and `0·∞` is NaN.
-        let total = V::select(some, area, V::splat(1.0));
+        let sum = V::select(sends, total, V::select(zero.lt(area), area, V::splat(1.0)));
         let mut power = [zero; 3];
-        for (w, f) in w.iter().zip(&light.cluster.facet) {
-            let share = *w / total;
+        for ((w, g), f) in facing.iter().zip(&at_facet).zip(&light.cluster.facet) {
+            let share = V::select(sends, *g, *w) / sum;
             power = [
                 power[0] + V::splat(f[3]) * share,
                 power[1] + V::splat(f[4]) * share,
                 power[2] + V::splat(f[5]) * share,
             ];
         }
+        let some = zero.lt(area);
         let ratio = |ch: usize, m: f32| V::select(some, power[ch], V::splat(m));
         (
             s.area * area / d2,
             [ratio(0, mean.x), ratio(1, mean.y), ratio(2, mean.z)],
+            s.area * total,
         )
     } else {
         let facing = -(s.nx * dx + s.ny * dy + s.nz * dz);
         (
             s.area * facing.max_of(zero) / d2,
             [V::splat(mean.x), V::splat(mean.y), V::splat(mean.z)],
+            zero,
         )
     };
     // A huge node right in front of the receiver overflows the far-field
@@ -250,17 +280,15 @@ pub(crate) fn locate<V: Real>(
         // light comes from its light centroid `l` (a mixed one's facets,
         // each from its own: one point for all would blend facets facing
         // ways the receiver does not see). Scale the radiance by
-        // `Σ|L|₁·G(l) / Σ|L|₁·G(c)`, `G = max(0, −n̄·ω)·cosθ/d²` per facet,
-        // so that it sends `A·L̄·G(l)`: no first-order error in where the
-        // light lies. At most `SHIFT` (where `G(c)` nears 0 at the horizon).
-        let n = [f.nx, f.ny, f.nz];
+        // `Σ|L|₁·G(l) / Σ|L|₁·G(c)`, `G = max(0, −n̄·ω)·cosθ/d²` per facet
+        // (a mixed node's `c` each facet's area centroid, where its
+        // coverage was taken), so that it sends `A·L̄·G(l)`: no first-order
+        // error in where the light lies. At most `SHIFT` (where `G(c)`
+        // nears 0 at the horizon).
         let (mut at_l, mut at_c) = (zero, zero);
         if light.kind == MIXED {
             let r = V::splat(light.radius);
-            // `G(c)` per facet from what placed the node: bit for bit
-            // `transfer` at `c`.
-            let cos = wz.max_of(zero);
-            for ((g, off), facing) in light.cluster.facet.iter().zip(&light.cluster.light).zip(facing) {
+            for ((g, off), at) in light.cluster.facet.iter().zip(&light.cluster.light).zip(at_facet) {
                 let (m, bright) = (
                     [V::splat(g[0]), V::splat(g[1]), V::splat(g[2])],
                     V::splat(g[3] + g[4] + g[5]),
@@ -271,7 +299,7 @@ pub(crate) fn locate<V: Real>(
                     s.cz + V::splat(off[2]) * r - f.pz,
                 ];
                 at_l = at_l + bright * transfer(m, u, n);
-                at_c = at_c + bright * sent(facing, cos, d2);
+                at_c = at_c + bright * at;
             }
         } else {
             let m = [s.nx, s.ny, s.nz];
@@ -308,10 +336,17 @@ pub(crate) fn locate<V: Real>(
     let sine = (kx * kx + ky * ky + kz * kz).sqrt();
     let top = vx * f.nx + vy * f.ny + vz * f.nz + V::splat(light.rise) * sine + V::splat(light.lift);
     let valid = zero.lt(d2) & d2.lt(inf) & zero.lt(raw) & zero.lt(sum) & zero.lt(top);
+    // A mixed node's `Σ A·G` is far-field like `Ω` and capped alike.
+    let projected = if light.kind == MIXED {
+        sent_at_facets.min_of(V::splat(std::f32::consts::TAU))
+    } else {
+        omega * wz.max_of(zero)
+    };
     Located {
         valid,
         d,
         omega,
+        projected,
         radiance,
         wx,
         wy,

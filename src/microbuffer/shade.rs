@@ -326,7 +326,7 @@ fn packet_body(
                 t,
                 l.x,
                 l.y,
-                F32s::select(small_m, l.omega, pixel_omega) * cos,
+                F32s::select(small_m, l.projected, pixel_omega * cos),
                 narrow,
             );
             Some(SmallWrites::new(&plan, l.d, node, &rad))
@@ -365,7 +365,7 @@ fn packet_body(
             }
         } else {
             let cp = plan_cone(t, l.x, l.y, pixel, l.omega, visible);
-            let target = F32s::select(visible, l.omega * cos, zero).to_array();
+            let target = F32s::select(visible, l.projected, zero).to_array();
             let (a, inv_s) = (cp.a.to_array(), cp.inv_s.to_array());
             let (inner2, outer2, bx) = (cp.inner2.to_array(), cp.outer2.to_array(), boxes(&cp.bx));
             let (wx, wy, wz) = (l.wx.to_array(), l.wy.to_array(), l.wz.to_array());

@@ -280,16 +280,25 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
         "Ω {} against the floor's {want}",
         l.omega
     );
-    // The light it sends, `Ω·cosθ·L`, is the floor's alone, from the
-    // floor's centroid (its light centroid: the floor is uniform): no
-    // share of the wall's dim light.
+    // What it covers, `∫cosθ dω`, is the floor's `A·G` at the floor's own
+    // centroid, not at the node's (halfway up the wall: there the floor
+    // is seen more obliquely); the light it sends, that times `L`, is the
+    // floor's alone (its light centroid: the floor is uniform), no share
+    // of the wall's dim light.
     let n = (Vec3::new(0.5, 0.0, 0.5) - at).normalize();
     let g = |p: Vec3| {
         let (v, l2) = ((p - at).normalize(), (p - at).length_squared());
         (-v.y).max(0.0) * n.dot(v).max(0.0) / l2
     };
     let centroid = floor.iter().map(|s| s.position).sum::<Vec3>() / floor.len() as f32;
-    let sent = l.omega * (-u).dot(n).max(0.0) * l.radiance[0];
+    let covers = floor_area * g(centroid);
+    assert!(
+        (l.projected / covers - 1.0).abs() < 1e-4,
+        "covers {}, the floor {covers}",
+        l.projected
+    );
+    assert!((l.projected / (l.omega * (-u).dot(n)) - 1.0).abs() > 0.01);
+    let sent = l.projected * l.radiance[0];
     let floor_sends = floor_area * 2.0 * g(centroid);
     assert!(
         (sent / floor_sends - 1.0).abs() < 1e-3,
