@@ -17,9 +17,12 @@
 //! 4: 25k, 8: 98k). Errors are in percent, relative per receiver; `µs` is
 //! the irradiance gather (traversal, splatting, convolution) per receiver,
 //! 16-lane pipeline unless `--scalar`. Each error is given over all
-//! receivers and over the `mid` ones alone (≥ 0.4 from every edge: the near
-//! edges and corners add the surfels' own discretization error, which only
-//! density reduces).
+//! receivers and over the `mid` ones alone (≥ 0.4 from every edge: over
+//! jittered surfels the near edges and corners add the cloud's own
+//! discretization error, where the few surfels beside a receiver happen to
+//! lie, which only density reduces). `--grid` puts the surfels on a grid,
+//! each standing for its own cell, so the exact answer is the cloud's own
+//! at every receiver.
 
 use std::time::Instant;
 
@@ -27,6 +30,10 @@ use glam::Vec3;
 use pbgi::Scheme;
 use pbgi::brdf::GlossyLobe;
 use pbgi::exact::{Gather, Quantity, RoomSpec, Scene, gather, stats};
+
+const USAGE: &str = "usage: exact [--scenes light,bounce,open,blocker] [--omega 0.1,0.05,…] [--n 8,12,…]
+    [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid] [--offset 2e-5]
+    [--min-ms 30] [--dump] [--class mid|edge|corner] [--light-offset K]";
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
     s.split(',').filter_map(|x| x.trim().parse().ok()).collect()
@@ -70,7 +77,14 @@ fn main() {
                 i += 1;
                 continue;
             }
-            other => panic!("unknown argument {other}"),
+            "--help" | "-h" => {
+                println!("{USAGE}");
+                return;
+            }
+            other => {
+                eprintln!("unknown argument {other}\n{USAGE}");
+                std::process::exit(2);
+            }
         }
         i += 2;
     }
