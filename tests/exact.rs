@@ -105,6 +105,15 @@ fn light_room() -> Scene {
     Scene::room(&RoomSpec::default())
 }
 
+/// The room without its ceiling: occlusion is one minus the opening's form
+/// factor.
+fn open_room() -> Scene {
+    Scene::room(&RoomSpec {
+        open_ceiling: true,
+        ..Default::default()
+    })
+}
+
 #[test]
 fn small_bright_light_converges_as_the_solid_angle_shrinks() {
     let scene = light_room();
@@ -176,10 +185,7 @@ fn error_falls_as_the_density_grows() {
 
 #[test]
 fn occlusion_of_an_open_box_is_one_minus_the_form_factor_of_its_opening() {
-    let scene = Scene::room(&RoomSpec {
-        open_ceiling: true,
-        ..Default::default()
-    });
+    let scene = open_room();
     let probes = mid(&scene);
     let (omega, n) = defaults();
     let defaults = error(&scene, &probes, 8, Quantity::Occlusion, omega, n);
@@ -312,10 +318,7 @@ fn at_every_receiver_the_defaults_are_within_three_percent_unbiased() {
     let (omega, n) = defaults();
     let light = light_room();
     let bounce = light.without_emitter();
-    let open = Scene::room(&RoomSpec {
-        open_ceiling: true,
-        ..Default::default()
-    });
+    let open = open_room();
     for (scene, what) in [
         (&light, Quantity::Irradiance),
         (&bounce, Quantity::Irradiance),
@@ -349,10 +352,7 @@ fn a_corner_receiver_seeing_two_walls_edge_on_converges_as_the_resolution_grows(
     // it falls with N at every Ω. (The receivers 0.01 from one edge rise
     // from N 24 to 48, 0.2–0.3 to 0.3–0.7 %: the next wall's nearest
     // surfels, a few times the receiver's distance across, drawn as disks.)
-    let open = Scene::room(&RoomSpec {
-        open_ceiling: true,
-        ..Default::default()
-    });
+    let open = open_room();
     let light = light_room();
     for (scene, what) in [(&light, Quantity::Irradiance), (&open, Quantity::Occlusion)] {
         let mut probes = every(scene);
@@ -376,10 +376,7 @@ fn a_surfel_beside_a_nearer_wall_is_not_lost() {
     // of itself a pixel away, where the nearer wall hid it: the open room's
     // mid-wall occlusion −0.53 %. Whole in its pixel, −0.14 % (what is
     // left: sub-samples straddling the corner, −0.03 % at N 24).
-    let open = Scene::room(&RoomSpec {
-        open_ceiling: true,
-        ..Default::default()
-    });
+    let open = open_room();
     let e = grid_error(&open, &mid(&open), 8, Quantity::Occlusion, 0.0, 14);
     assert!(e.bias.abs() <= 0.0025, "{e:?}");
 }
