@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::buffer::{Fragments, MicroBuffer, key};
 use super::locate::{Located, NodeSplat};
-use super::plan::{ConePlan, DiskPlan, SmallPlan, narrow, pixel_of, plan_cone, plan_disk, plan_small};
+use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach};
 use super::table::Table;
 use crate::simd::Real;
 use crate::tree::{LEAF, NodeId, SplatRecord};
@@ -113,8 +113,8 @@ impl MicroBuffer {
         if l.omega < pixel_omega {
             // Also below the horizon, where it adds nothing (cos 0): a cone
             // there would put a pixel's worth at the horizon.
-            let narrow = narrow(t, rec.kind == LEAF, rec.area, l.omega, l.d);
-            let plan = plan_small(t, l.x, l.y, l.projected, narrow);
+            let reach = reach(t, rec.kind == LEAF, rec.area, l.omega, l.d, pixel);
+            let plan = plan_small(t, l.x, l.y, l.projected, reach);
             self.draw_small(&plan, key, radiance);
         } else if rec.kind == LEAF {
             let plan = plan_disk(t, &self.frame_lanes(), &NodeSplat::of(rec), l.x, l.y, pixel, l.d);
@@ -122,7 +122,7 @@ impl MicroBuffer {
             // the receiver's plane: a leaf missing every centre gets a pixel at most.
             if !self.draw_disk(&plan, node, radiance) && visible {
                 let t = &*self.table;
-                let plan = plan_small(t, l.x, l.y, pixel_omega * cos, false);
+                let plan = plan_small(t, l.x, l.y, pixel_omega * cos, 0.5);
                 self.draw_small(&plan, key, radiance);
             }
         } else {

@@ -2,9 +2,8 @@
 //! is drawn one of three ways:
 //!
 //! * smaller than the pixel its centre falls in (`Ω < ΔΩ`): spread over the
-//!   2×2 pixels around the centre with bilinear weights, each covered by its
-//!   weight times `Ω/ΔΩ`, or, narrower than half a sub-sample, whole in
-//!   that pixel ([`plan_small`]);
+//!   pixels its footprint overlaps (up to 2×2), each covered by its share
+//!   times `Ω/ΔΩ` ([`plan_small`]);
 //! * a larger cluster: a soft cone ([`plan_cone`]);
 //! * a larger leaf: its disk, ray-traced at the pixel centres of a box
 //!   ([`plan_disk`]; a disk whose front no pixel's ray can face is known to
@@ -119,9 +118,19 @@ pub(crate) struct SmallPlan<V> {
     pub cover: [V; 4],
 }
 
+/// The share `½ + (t − ½)/width` of a box `width` wide in the second of two
+/// pixels, `t` its centre's bilinear weight there, clamped to `[0, 1]`.
+#[inline(always)]
+fn box_share<V: Real>(t: V, width: V) -> V {
+    let half = V::splat(0.5);
+    (half + (t - half) / width)
+        .max_of(V::splat(0.0))
+        .min_of(V::splat(1.0))
+}
+
 /// Coverage `w·Ω·cosθ / ∫cos` of one corner (none where `∫cos` is 0).
 #[inline(always)]
-fn share<V: Real>(w: V, omega_cos: V, cos_weight: V) -> V {
+fn share_of<V: Real>(w: V, omega_cos: V, cos_weight: V) -> V {
     V::select(
         V::splat(0.0).lt(cos_weight),
         w * (omega_cos / cos_weight),
@@ -142,41 +151,43 @@ pub(crate) fn chord2<V: Real>(leaf: bool, r2: V, d: V) -> V {
     }
 }
 
-/// Whether a splat of `area` and projected solid angle `omega` at distance
-/// `d` has a footprint under half the smallest sub-sample across ([`chord2`]
-/// of a leaf's disk, of a cluster's cone), for [`plan_small`].
+/// How far past its centre the footprint of a splat of `area` and
+/// projected solid angle `omega` at distance `d` reaches, in pixels
+/// ([`chord2`] of a leaf's disk, of a cluster's cone, over the angular
+/// size of pixel `pixel`), at most ½: for [`plan_small`].
 #[inline(always)]
-pub(crate) fn narrow<V: Real>(t: &Table, leaf: bool, area: V, omega: V, d: V) -> V::Mask {
+pub(crate) fn reach<V: Real>(t: &Table, leaf: bool, area: V, omega: V, d: V, pixel: V) -> V {
     let r2 = if leaf { area } else { omega } * V::splat(std::f32::consts::FRAC_1_PI);
-    chord2(leaf, r2, d).lt(V::splat(t.half_sample * t.half_sample))
+    (chord2(leaf, r2, d).sqrt() / V::gather(&t.pixel_size, pixel)).min_of(V::splat(0.5))
 }
 
 /// Spreads projected solid angle `omega_cos` (`Ω·cosθ`) at `(x, y)` over
-/// the 2×2 pixels around it (bilinear weights between pixel centres, clamped
-/// into the grid): pixel `k` is covered by `w_k·Ω·cosθ / ∫_k cos`, so the
-/// splat adds exactly its projected solid angle to the convolution.
+/// the pixels its footprint, `reach` pixels across each way (at most ½),
+/// overlaps: the one it falls in and up to three beside it, each covered
+/// by `w_k·Ω·cosθ / ∫_k cos`, `w_k` the share of the footprint's box in
+/// pixel `k` (clamped into the grid). The splat adds exactly its projected
+/// solid angle to the convolution. At a reach of ½ the shares are the
+/// bilinear weights between pixel centres; a footprint within its pixel
+/// leaves one fragment.
 ///
-/// Where the footprint is `narrow` (under half a sub-sample across, so that
-/// `samples` puts it whole at one sub-sample), all of it goes to the pixel
-/// its centre falls in. Spread, its part in a neighbouring pixel went to
-/// the sub-sample there nearest its centre, up to a pixel from where it is;
-/// where a nearer surface begins that close (a room's corner seen from
-/// inside, a silhouette), that part lay behind it and was lost: a closed
-/// room's mid-wall occlusion, leaves only, N 14, −0.53 % (−0.14 % with it
-/// whole in its pixel).
+/// Spread by bilinear weights whatever its size, a splat's part in a
+/// neighbouring pixel its footprint did not reach went to the sub-sample
+/// there nearest its centre, up to a pixel from where it is; where a
+/// nearer surface begins that close (a room's corner seen from inside, a
+/// silhouette), that part lay behind it and was lost: a closed room's
+/// mid-wall occlusion, leaves only, N 14, −0.53 % (−0.14 % with footprints
+/// under half a sub-sample whole in their pixel).
 #[inline(always)]
-pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V, narrow: V::Mask) -> SmallPlan<V> {
+pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V, reach: V) -> SmallPlan<V> {
     let (zero, half, one) = (V::splat(0.0), V::splat(0.5), V::splat(1.0));
     let (n, last) = (V::splat(t.n as f32), V::splat((t.n - 1) as f32));
     let (gx, gy) = (x - half, y - half);
     let (x0, y0) = (gx.floor(), gy.floor());
-    let (tx, ty) = (gx - x0, gy - y0);
-    // Narrow: the weight 1 on the corner whose pixel holds the centre
-    // (`pixel_of`: column ⌊x⌋ is `x0 + 1` from `tx = ½` on).
-    let (tx, ty) = (
-        V::select(narrow, V::select(half.le(tx), one, zero), tx),
-        V::select(narrow, V::select(half.le(ty), one, zero), ty),
-    );
+    // Bilinear weight `t` of the second column, as the share of a box
+    // `reach` wide each way: `½ + (t − ½)/(2·reach)`, clamped (the second
+    // column is the centre's from `t = ½` on).
+    let width = (reach + reach).max_of(V::splat(1e-6));
+    let (tx, ty) = (box_share(gx - x0, width), box_share(gy - y0, width));
     let (c0, c1) = (x0.max_of(zero).min_of(last), (x0 + one).max_of(zero).min_of(last));
     let (r0, r1) = (y0.max_of(zero).min_of(last), (y0 + one).max_of(zero).min_of(last));
     let p = [r0 * n + c0, r0 * n + c1, r1 * n + c0, r1 * n + c1];
@@ -185,10 +196,10 @@ pub(crate) fn plan_small<V: Real>(t: &Table, x: V, y: V, omega_cos: V, narrow: V
     // then compiled for the baseline target rather than the caller's clone.
     let cw = &t.cos_weight;
     let cover = [
-        share(w[0], omega_cos, V::gather(cw, p[0])),
-        share(w[1], omega_cos, V::gather(cw, p[1])),
-        share(w[2], omega_cos, V::gather(cw, p[2])),
-        share(w[3], omega_cos, V::gather(cw, p[3])),
+        share_of(w[0], omega_cos, V::gather(cw, p[0])),
+        share_of(w[1], omega_cos, V::gather(cw, p[1])),
+        share_of(w[2], omega_cos, V::gather(cw, p[2])),
+        share_of(w[3], omega_cos, V::gather(cw, p[3])),
     ];
     SmallPlan { p, w, cover }
 }

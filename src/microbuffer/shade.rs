@@ -20,7 +20,7 @@ use glam::Vec3;
 use super::buffer::{MicroBuffer, key};
 use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
 use super::plan::{
-    ConePlan, DiskPlan, PixelBox, SmallPlan, narrow, pixel_of, plan_cone, plan_disk, plan_small,
+    ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach,
 };
 use super::table::Table;
 use crate::cut::CutSink;
@@ -321,13 +321,17 @@ fn packet_body(
         // (An `if`, not `bool::then` with a closure: an out-of-line closure
         // would be compiled for the baseline target, not this clone.)
         let small_plan = if small != 0 || (leaf && large != 0) {
-            let narrow = narrow(t, leaf, s.area, l.omega, l.d) & small_m;
+            let reach = F32s::select(
+                small_m,
+                reach(t, leaf, s.area, l.omega, l.d, pixel),
+                F32s::splat(0.5),
+            );
             let plan = plan_small(
                 t,
                 l.x,
                 l.y,
                 F32s::select(small_m, l.projected, pixel_omega * cos),
-                narrow,
+                reach,
             );
             Some(SmallWrites::new(&plan, l.d, node, &rad))
         } else {
