@@ -167,13 +167,6 @@ pub(super) fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
     let w = [u[0] / l, u[1] / l, u[2] / l];
     let facing = (-(m[0] * w[0] + m[1] * w[1] + m[2] * w[2])).max_of(zero);
     let cos = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]).max_of(zero);
-    sent(facing, cos, l2)
-}
-
-/// [`transfer`] from its facing `max(0, −m·ω)`, `max(0, n·ω)` and `|u|²`.
-#[inline(always)]
-fn sent<V: Real>(facing: V, cos: V, l2: V) -> V {
-    let zero = V::splat(0.0);
     let g = facing * cos / l2;
     V::select(zero.lt(l2) & zero.le(g) & g.lt(V::splat(f32::INFINITY)), g, zero)
 }
