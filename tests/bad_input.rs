@@ -641,7 +641,8 @@ fn degenerate_triangles_render() {
 
 /// A scratch directory per test process.
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbgi-bad-input-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("pbgi-bad-input-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -11,7 +11,8 @@ use pbgi::render::{RenderOptions, render};
 use pbgi::scene::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError, load};
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pbgi-gltf-tests-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("pbgi-gltf-tests-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -332,7 +332,8 @@ fn small_scene(dir: &Path) -> PathBuf {
 #[cfg(feature = "cli")]
 #[test]
 fn the_cli_report_runs_end_to_end() {
-    let dir = std::env::temp_dir().join(format!("pbgi-report-{}", std::process::id()));
+    let dir =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("pbgi-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = small_scene(&dir);
     let out_dir = dir.join("out");

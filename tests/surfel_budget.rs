@@ -80,7 +80,8 @@ fn the_budget_holds_in_any_units() {
 
 #[test]
 fn the_cli_uses_a_budget_for_files_and_says_so() {
-    let dir = std::env::temp_dir().join(format!("pbgi-budget-{}", std::process::id()));
+    let dir =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("pbgi-budget-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // A quad 2 km on a side, in millimetres: a density would ask for 10¹³ surfels.
     let quad = "OFF\n4 2 0\n-1e6 0 -1e6\n1e6 0 -1e6\n1e6 0 1e6\n-1e6 0 1e6\n3 0 2 1\n3 0 3 2\n";
@@ -119,7 +120,8 @@ fn the_cli_uses_a_budget_for_files_and_says_so() {
 
 #[test]
 fn a_file_gets_the_default_budget() {
-    let dir = std::env::temp_dir().join(format!("pbgi-budget-default-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("pbgi-budget-default-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("small.off");
     // Tiny: 1 mm on a side in metres, 10⁻⁶ m²: density 2000 would make 2 surfels.
