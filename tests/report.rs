@@ -383,5 +383,22 @@ fn the_cli_report_runs_end_to_end() {
     ]);
     assert!(!ok);
     assert!(text.contains("24×16") && text.contains("256×256"), "{text}");
+
+    // `pbgi compare`: an image of another scene than `--scene` (the Cornell
+    // box by default) is refused naming the file, both sizes and the option.
+    let compare = |args: &[&str]| {
+        let o = common::pbgi_command().arg("compare").args(args).output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        (o.status.success(), text)
+    };
+    let r = reference.to_str().unwrap();
+    let (ok, text) = compare(&[r, r]);
+    assert!(!ok);
+    assert!(
+        text.contains("reference.exr: 24×16 pixels") && text.contains("256×256") && text.contains("--scene"),
+        "{text}"
+    );
+    let (ok, text) = compare(&["--scene", scene_s, r, r]);
+    assert!(ok && text.contains("relative RMSE 0.0000"), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -56,15 +56,18 @@ pub struct Comparison {
 
 /// `image` against `reference` over the pixels not in `mask`, in f64.
 pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Comparison, RenderError> {
-    if (image.width, image.height) != (reference.width, reference.height) || mask.len() != image.pixels.len()
-    {
+    if (image.width, image.height) != (reference.width, reference.height) {
         return Err(RenderError::Check(format!(
-            "image {}×{} against reference {}×{} ({} mask pixels)",
+            "image {}×{} against reference {}×{}",
+            image.width, image.height, reference.width, reference.height
+        )));
+    }
+    if mask.len() != image.pixels.len() {
+        return Err(RenderError::Check(format!(
+            "an emitter mask of {} pixels for an image of {}×{} (a mask of another scene?)",
+            mask.len(),
             image.width,
-            image.height,
-            reference.width,
-            reference.height,
-            mask.len()
+            image.height
         )));
     }
     let (mut err, mut norm, mut sum, mut sum_ref, mut pixels) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
@@ -147,15 +150,19 @@ pub fn mean_reference(references: &[Image], mask: &[bool]) -> Result<(Image, Opt
     };
     if let Some(bad) = references
         .iter()
-        .find(|r| (r.width, r.height) != (first.width, first.height) || r.pixels.len() != mask.len())
+        .find(|r| (r.width, r.height) != (first.width, first.height))
     {
         return Err(RenderError::Check(format!(
-            "references of {}×{} and {}×{} pixels ({} mask pixels)",
+            "references of {}×{} and {}×{} pixels",
+            first.width, first.height, bad.width, bad.height
+        )));
+    }
+    if first.pixels.len() != mask.len() {
+        return Err(RenderError::Check(format!(
+            "an emitter mask of {} pixels for references of {}×{} (a mask of another scene?)",
+            mask.len(),
             first.width,
-            first.height,
-            bad.width,
-            bad.height,
-            mask.len()
+            first.height
         )));
     }
     let k = references.len() as f64;

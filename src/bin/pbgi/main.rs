@@ -217,6 +217,22 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
     let scene = load_scene(&a.scene)?;
     let image = read_exr(&a.image)?;
     let references = a.reference.iter().map(|p| read_exr(p)).collect::<Res<Vec<_>>>()?;
+    // The emitter mask is the scene's camera's: an image of another scene
+    // (the default is the Cornell box) is named here, not as a mask's length.
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let images = std::iter::once((&a.image, &image)).chain(a.reference.iter().zip(&references));
+    for (path, i) in images {
+        if (i.width, i.height) != (w, h) {
+            return Err(format!(
+                "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene",
+                path.display(),
+                i.width,
+                i.height,
+                a.scene
+            )
+            .into());
+        }
+    }
     let mask = pbgi::report::emitter_mask(&scene);
     let (reference, noise) = pbgi::report::mean_reference(&references, &mask)?;
     let e = pbgi::report::compare(&image, &reference, &mask)?;
