@@ -33,22 +33,16 @@ use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::simd::LANES;
 
-/// Cosine between two normals of one surface (18°): a curved surface's
-/// corners 4 pixels apart (the nave's 12-sided piers with smooth normals, a
-/// vault, the bunny) are one surface, whose light the corners' irradiance
-/// test follows. At 5.7° such a surface refined to single pixels: the nave
-/// at 16 spp took 12,305 gathers, now 7,561, 0.58 → 0.59 % off the dense
-/// image. At 26° Sponza was 1.12 % off it (0.84 % at 5.7°,
-/// 0.94 % at 18°).
+/// Cosine between two normals of one surface (18°): a curved surface (the
+/// nave's piers, a vault, the bunny) refined to single pixels at 5.7°
+/// (BENCHMARKS.md, "Sparse gathers on curved surfaces").
 const SAME_NORMAL: f32 = 0.95;
 /// Distance off a gathered point's plane, relative to the camera's
 /// distance, that is rounding.
 const SAME_PLANE: f32 = 1e-4;
 /// Distance off the plane, relative to the distance along it, that a
-/// surface curving by up to 5.7° keeps (half that angle's sine); a surface
-/// whose normals differ more may lie off the plane by that angle's sine
-/// (a facet's edge between the two points). Two parallel planes apart (a
-/// step, a moulding) are never one surface.
+/// surface curving by 5.7° keeps; normals further apart allow their angle's
+/// sine (a facet's edge between the points). A step is two surfaces.
 const CURVATURE: f32 = 0.05;
 
 /// A gathered lattice point: where, and the irradiance (or occlusion) its
