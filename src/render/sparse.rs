@@ -59,9 +59,10 @@ impl Record {
     /// record's surface.
     pub fn covers(&self, p: Vec3, n: Vec3, eye: Vec3) -> bool {
         let d = p - self.position;
-        let bend = self.normal.cross(n).length().max(CURVATURE);
-        self.normal.dot(n) >= SAME_NORMAL
-            && self.normal.dot(d).abs() <= SAME_PLANE * (p - eye).length() + bend * d.length()
+        self.normal.dot(n) >= SAME_NORMAL && {
+            let bend = self.normal.cross(n).length().max(CURVATURE);
+            self.normal.dot(d).abs() <= SAME_PLANE * (p - eye).length() + bend * d.length()
+        }
     }
 }
 
@@ -510,8 +511,7 @@ mod tests {
 
     #[test]
     fn facets_of_a_curved_surface_are_one_surface_and_a_step_is_two() {
-        // Two facets meeting at the origin along z, their normals `a` apart:
-        // one in the plane y = 0, the other rising from it at `a`.
+        // Facets meeting along z: y = 0 and one rising from it at `a`.
         let eye = Vec3::new(0.0, 5.0, 5.0);
         let across = |a: f32| {
             let r = record(Vec3::new(-0.5, 0.0, 0.0), Vec3::Y, 1.0).unwrap();

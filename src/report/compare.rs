@@ -54,6 +54,20 @@ pub struct Comparison {
     pub pixels: usize,
 }
 
+/// Whether `mask` has one entry per pixel of `image` (a mask of another
+/// scene's camera would not).
+fn mask_fits(mask: &[bool], image: &Image) -> Result<(), RenderError> {
+    if mask.len() == image.pixels.len() {
+        return Ok(());
+    }
+    Err(RenderError::Check(format!(
+        "an emitter mask of {} pixels for images of {}×{} (a mask of another scene?)",
+        mask.len(),
+        image.width,
+        image.height
+    )))
+}
+
 /// `image` against `reference` over the pixels not in `mask`, in f64.
 pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Comparison, RenderError> {
     if (image.width, image.height) != (reference.width, reference.height) {
@@ -62,14 +76,7 @@ pub fn compare(image: &Image, reference: &Image, mask: &[bool]) -> Result<Compar
             image.width, image.height, reference.width, reference.height
         )));
     }
-    if mask.len() != image.pixels.len() {
-        return Err(RenderError::Check(format!(
-            "an emitter mask of {} pixels for an image of {}×{} (a mask of another scene?)",
-            mask.len(),
-            image.width,
-            image.height
-        )));
-    }
+    mask_fits(mask, image)?;
     let (mut err, mut norm, mut sum, mut sum_ref, mut pixels) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
     for ((a, b), &skip) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
         if skip {
@@ -157,14 +164,7 @@ pub fn mean_reference(references: &[Image], mask: &[bool]) -> Result<(Image, Opt
             first.width, first.height, bad.width, bad.height
         )));
     }
-    if first.pixels.len() != mask.len() {
-        return Err(RenderError::Check(format!(
-            "an emitter mask of {} pixels for references of {}×{} (a mask of another scene?)",
-            mask.len(),
-            first.width,
-            first.height
-        )));
-    }
+    mask_fits(mask, first)?;
     let k = references.len() as f64;
     let (mut pixels, mut var, mut norm) = (Vec::with_capacity(mask.len()), 0.0f64, 0.0f64);
     for (i, &skip) in mask.iter().enumerate() {
