@@ -1,0 +1,151 @@
+//! The gather at chosen receivers of a scene against its ground truth: the
+//! one-bounce irradiance ray cast from the receiver (cosine-weighted rays,
+//! direct light reflected at each hit: what the gather's surfels carry),
+//! for several Ω and microbuffer sizes. It finds where the gather leaks or
+//! loses light, which an image-wide error only averages.
+//!
+//! ```text
+//! cargo run --release --example leak -- SCENE "x,y,z[,nx,ny,nz];…" \
+//!     [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays 200000] [--lit X0,Y0,Z0,X1,Y1,Z1]
+//! ```
+//!
+//! The normal defaults to +y. `--lit` keeps the light of the surfels (and
+//! of the ray hits) inside that box alone, so one source's share is
+//! measured with every occluder still in place. Irradiance is the mean of
+//! the three channels. BENCHMARKS.md, "The nave's indirect bias", used it
+//! on the nave's window jambs.
+
+use glam::Vec3;
+use pbgi::gather::{Gather, GatherOptions};
+use pbgi::render::{BakeOptions, Lights, Tracer, bake};
+use pbgi::rng::Rng;
+use pbgi::{PointCloud, Surfel, Tree};
+
+const USAGE: &str = "usage: leak SCENE \"x,y,z[,nx,ny,nz];…\" [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays N] [--lit X0,Y0,Z0,X1,Y1,Z1]";
+
+fn floats(s: &str) -> Result<Vec<f32>, String> {
+    s.split(',')
+        .map(|x| x.trim().parse::<f32>().map_err(|e| format!("{x:?}: {e}")))
+        .collect()
+}
+
+fn mean(v: Vec3) -> f64 {
+    f64::from(v.x + v.y + v.z) / 3.0
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (mut omegas, mut sizes, mut rays, mut lit) =
+        (vec![0.15, 0.01, 0.001], vec![14, 32, 48], 200_000u32, None);
+    let mut positional = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value\n{USAGE}"));
+        match a.as_str() {
+            "--omega" => omegas = floats(value()?)?,
+            "--n" => sizes = value()?.split(',').map(str::parse).collect::<Result<_, _>>()?,
+            "--rays" => rays = value()?.parse()?,
+            "--lit" => match floats(value()?)?[..] {
+                [a, b, c, d, e, f] => lit = Some((Vec3::new(a, b, c), Vec3::new(d, e, f))),
+                _ => return Err(format!("--lit takes six numbers\n{USAGE}").into()),
+            },
+            _ => positional.push(a.clone()),
+        }
+    }
+    let [scene, receivers] = &positional[..] else {
+        return Err(USAGE.into());
+    };
+    if omegas.len() != sizes.len() {
+        return Err(format!("--omega and --n need as many values\n{USAGE}").into());
+    }
+    let receivers = receivers
+        .split(';')
+        .map(|r| match floats(r)?[..] {
+            [x, y, z] => Ok((Vec3::new(x, y, z), Vec3::Y)),
+            [x, y, z, a, b, c] => Ok((Vec3::new(x, y, z), Vec3::new(a, b, c).normalize())),
+            _ => Err(format!("receiver {r:?}: x,y,z or x,y,z,nx,ny,nz")),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let inside = |p: Vec3| lit.is_none_or(|(lo, hi): (Vec3, Vec3)| p.cmpge(lo).all() && p.cmple(hi).all());
+
+    let scene = pbgi::scene::catalogue::resolve(scene)?;
+    let tracer = Tracer::new(&scene);
+    let lights = Lights::new(&scene);
+    let baked = bake(
+        &scene,
+        &tracer,
+        &lights,
+        &BakeOptions {
+            density: 2000.0,
+            ..Default::default()
+        },
+    )?;
+    let surfels: Vec<Surfel> = baked
+        .cloud
+        .surfels()
+        .iter()
+        .map(|&s| Surfel {
+            radiance: if inside(s.position) {
+                s.radiance
+            } else {
+                Vec3::ZERO
+            },
+            ..s
+        })
+        .collect();
+    let tree = Tree::build(&PointCloud::new(surfels)?);
+
+    let mut rows = vec![String::from("ray cast")];
+    let mut truth = Vec::new();
+    for &(p, n) in &receivers {
+        let (t, b) = n.any_orthonormal_pair();
+        let origin = p + n * tracer.epsilon();
+        let mut rng = Rng::new(9);
+        let mut sum = 0.0;
+        for i in 0..rays {
+            let (u, v) = (rng.f32(), rng.f32());
+            let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
+            let d = (t * phi.cos() + b * phi.sin()) * r + n * (1.0 - u).max(0.0).sqrt();
+            let Some(hit) = tracer.closest(origin, d, f32::INFINITY) else {
+                continue;
+            };
+            // Flat normals, as the surfels have; a one-sided back face is black.
+            let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
+            let mut ng = hit.geometric_normal;
+            if ng.dot(d) > 0.0 {
+                if !material.two_sided {
+                    continue;
+                }
+                ng = -ng;
+            }
+            let q = origin + d * hit.t;
+            if !inside(q) {
+                continue;
+            }
+            let f = material.albedo * std::f32::consts::FRAC_1_PI;
+            // One area-light sample per ray, each its own point of the sequence.
+            let scramble = [rng.f32().to_bits(), rng.f32().to_bits()];
+            sum += mean(lights.reflected(&tracer, q + ng * tracer.epsilon(), ng, 1, i, scramble, |_| f));
+        }
+        truth.push(std::f64::consts::PI * sum / f64::from(rays));
+    }
+    rows[0] += &truth.iter().map(|e| format!(" | {e:.5}")).collect::<String>();
+    for (&omega, &n) in omegas.iter().zip(&sizes) {
+        let mut opts = GatherOptions::default();
+        opts.cut.max_solid_angle = omega;
+        opts.microbuffer = n;
+        let e = Gather::new(&tree, &opts)?.irradiance(&receivers)?;
+        let cells: String = e
+            .iter()
+            .zip(&truth)
+            .map(|(&e, &t)| format!(" | {:.5} ({:+.0} %)", mean(e), 100.0 * (mean(e) / t - 1.0)))
+            .collect();
+        rows.push(format!("Ω {omega}, N {n}{cells}"));
+    }
+    let head: String = receivers.iter().map(|(p, n)| format!(" | {p} n {n}")).collect();
+    println!("| irradiance{head} |\n|---{} |", " | ---".repeat(receivers.len()));
+    for r in rows {
+        println!("| {r} |");
+    }
+    Ok(())
+}
