@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! cargo run --release --example leak -- SCENE "x,y,z[,nx,ny,nz];…" \
-//!     [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays 200000] [--lit X0,Y0,Z0,X1,Y1,Z1]
+//!     [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays 200000] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K]
 //! ```
 //!
 //! The normal defaults to +y. `--lit` keeps the light of the surfels (and
@@ -21,7 +21,7 @@ use pbgi::render::{BakeOptions, Lights, Tracer, bake};
 use pbgi::rng::Rng;
 use pbgi::{PointCloud, Surfel, Tree};
 
-const USAGE: &str = "usage: leak SCENE \"x,y,z[,nx,ny,nz];…\" [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays N] [--lit X0,Y0,Z0,X1,Y1,Z1]";
+const USAGE: &str = "usage: leak SCENE \"x,y,z[,nx,ny,nz];…\" [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays N] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K]";
 
 fn floats(s: &str) -> Result<Vec<f32>, String> {
     s.split(',')
@@ -37,6 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut omegas, mut sizes, mut rays, mut lit) =
         (vec![0.15, 0.01, 0.001], vec![14, 32, 48], 200_000u32, None);
+    let mut light_offset = 0.0;
     let mut positional = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -45,6 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--omega" => omegas = floats(value()?)?,
             "--n" => sizes = value()?.split(',').map(str::parse).collect::<Result<_, _>>()?,
             "--rays" => rays = value()?.parse()?,
+            "--light-offset" => light_offset = value()?.parse()?,
             "--lit" => match floats(value()?)?[..] {
                 [a, b, c, d, e, f] => lit = Some((Vec3::new(a, b, c), Vec3::new(d, e, f))),
                 _ => return Err(format!("--lit takes six numbers\n{USAGE}").into()),
@@ -134,6 +136,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut opts = GatherOptions::default();
         opts.cut.max_solid_angle = omega;
         opts.microbuffer = n;
+        opts.cut.light_offset = light_offset;
         let e = Gather::new(&tree, &opts)?.irradiance(&receivers)?;
         let cells: String = e
             .iter()
