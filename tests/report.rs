@@ -258,14 +258,17 @@ fn a_small_sweep_measures_every_curve() {
         "Ω {}",
         ((f64::from(base.cut.max_solid_angle) * 0.4 * 1e4).round() / 1e4) as f32
     );
-    assert_eq!(labels, ["defaults", small.as_str(), "dense gathers"]);
+    assert_eq!(
+        labels,
+        ["defaults", small.as_str(), "dense gathers", "Ω 0.5, N 8"]
+    );
     let last = std::sync::Mutex::new(None);
     let points = error_sweep(&scene, &reference, &opts, &|p| {
         *last.lock().unwrap() = Some(p.clone())
     })
     .unwrap();
     let last = last.into_inner().unwrap().unwrap();
-    assert_eq!((last.done, last.images, last.remaining_s), (7, 7, Some(0.0)));
+    assert_eq!((last.done, last.images, last.remaining_s), (9, 9, Some(0.0)));
     let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
     assert_eq!(
         order,
@@ -275,6 +278,8 @@ fn a_small_sweep_measures_every_curve() {
             (small.as_str(), 4),
             ("dense gathers", 1),
             ("dense gathers", 4),
+            ("Ω 0.5, N 8", 1),
+            ("Ω 0.5, N 8", 4),
             (PATH_TRACER, 4),
             (PATH_TRACER, 64)
         ]
@@ -286,9 +291,9 @@ fn a_small_sweep_measures_every_curve() {
         );
     }
     assert!(
-        points[6].rel_rmse < 0.6 * points[5].rel_rmse,
+        points[8].rel_rmse < 0.6 * points[7].rel_rmse,
         "{:?}",
-        &points[5..]
+        &points[7..]
     );
 
     let mut small = reference.clone();
