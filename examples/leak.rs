@@ -16,6 +16,7 @@
 //! on the nave's window jambs.
 
 use glam::Vec3;
+use pbgi::brdf::lambert_sample;
 use pbgi::gather::{Gather, GatherOptions};
 use pbgi::render::{BakeOptions, Lights, Tracer, bake};
 use pbgi::rng::Rng;
@@ -100,14 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut rows = vec![String::from("ray cast")];
     let mut truth = Vec::new();
     for &(p, n) in &receivers {
-        let (t, b) = n.any_orthonormal_pair();
         let origin = p + n * tracer.epsilon();
         let mut rng = Rng::new(9);
         let mut sum = 0.0;
         for i in 0..rays {
-            let (u, v) = (rng.f32(), rng.f32());
-            let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
-            let d = (t * phi.cos() + b * phi.sin()) * r + n * (1.0 - u).max(0.0).sqrt();
+            let d = lambert_sample(n, rng.f32(), rng.f32());
             let Some(hit) = tracer.closest(origin, d, f32::INFINITY) else {
                 continue;
             };

@@ -3,6 +3,16 @@
 
 use glam::Vec3;
 
+/// A direction drawn from Lambert's cosine-weighted hemisphere around the
+/// unit normal `n`, from two uniform numbers in `[0, 1)` (pdf `cosθ/π`).
+#[inline]
+pub fn lambert_sample(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let r = u1.sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    let (t, b) = n.any_orthonormal_pair();
+    t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
+}
+
 /// A glossy lobe: `f_s(ωi, ωo) = specular · (e + 2)/(2π) · max(0, r·ωi)^e`,
 /// `r` the mirror direction of `ωo`, exponent `e = 2/α² − 2` from the
 /// roughness `α`. At normal incidence its albedo is `specular·(e+2)/(e+1)`

@@ -16,7 +16,7 @@ use super::options::Component;
 use super::output::RenderError;
 use super::shading::shading_point;
 use super::trace::Tracer;
-use crate::brdf::GlossyLobe;
+use crate::brdf::{GlossyLobe, lambert_sample};
 use crate::error::Error;
 use crate::rng::Rng;
 use crate::scene::{Light, Material, Scene};
@@ -100,13 +100,7 @@ impl Bsdf<'_> {
         let (u0, u1, u2) = (rng.f32(), rng.f32(), rng.f32());
         let wi = match &self.lobe {
             Some(l) if u0 < self.glossy_weight() => l.sample(n, wo, u1, u2).0,
-            _ => {
-                // Cosine-weighted hemisphere.
-                let r = u1.sqrt();
-                let phi = std::f32::consts::TAU * u2;
-                let (t, b) = n.any_orthonormal_pair();
-                t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
-            }
+            _ => lambert_sample(n, u1, u2),
         };
         (n.dot(wi) > 0.0 && wi.is_finite()).then(|| wi.normalize())
     }
