@@ -113,11 +113,14 @@ fn sparse_gathers_stay_within_one_percent_of_the_dense_image_on_the_built_in_sce
 fn samples_of_a_pixel_on_one_surface_share_a_gather_and_stay_within_one_percent() {
     // The nave's piers are faceted: lattice corners fall on other facets,
     // so samples there gather themselves. At 16 camera samples a pixel's
-    // samples on one facet share one gather: at most 20 % of the dense
-    // render's gathers (9.9 % measured; 16.1 % while corners with normals
-    // over 5.7° apart were two surfaces, 22.6 % gathering each), within 1 %
-    // of it (0.59 %). Under emulation a 24×18 frame, where the lattice is
-    // most of the gathers: at most 35 % (23.2 %; 29.3 % at 5.7°, 41.6 %
+    // samples on one facet share one gather, and where the light changes
+    // within a pixel each quarter's does: at most 20 % of the dense
+    // render's gathers (7.5 % measured; 9.9 % with a gather per such
+    // sample, 16.1 % while corners with normals over 5.7° apart were two
+    // surfaces, 22.6 % gathering each), within 1 % of it (0.64 %; 0.59 %).
+    // Under emulation a 24×18 frame, where the lattice is most of the
+    // gathers: at most 35 % (17.9 %, 0.77 % off; 23.2 %, 0.76 % with a
+    // gather per sample where the light changes; 29.3 % at 5.7°, 41.6 %
     // without sharing).
     let s = pbgi::scene::builtin::scene("nave").expect("built-in");
     let (s, share) = if common::reduced() {

@@ -12,7 +12,8 @@
 //! file, [`bake_tree`]);
 //! `shading` (shading points), `frame` (the frame, tile by tile, each packet
 //! through a [`Gatherer`](crate::gather::Gatherer)), `sparse` (the lattice of
-//! sparse gathers), `tile` (one tile's camera samples);
+//! sparse gathers), `share` (which samples it does not serve share a
+//! gather), `tile` (one tile's camera samples);
 //! `image` and `output` (what comes out); `reference` (the path tracer the
 //! report measures against).
 
@@ -26,6 +27,7 @@ mod options;
 mod output;
 pub mod reference;
 mod shading;
+mod share;
 mod sparse;
 mod tile;
 mod trace;

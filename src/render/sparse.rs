@@ -195,66 +195,13 @@ pub(crate) enum Served {
     Light(Vec3),
     /// No corner lies on its surface (a thin object, a facet between
     /// lattice points): it gathers, and its pixel's other such samples on
-    /// the same surface may share that gather ([`share`]).
+    /// the same surface may share that gather (`share`).
     NoCorner,
     /// Its one-pixel cell's light changes too much, or only one corner lies
     /// on its surface: the light changes within the pixel, so it gathers
-    /// at its own place.
+    /// at its own place, shared only within its quarter of the pixel
+    /// (`share`).
     Changing,
-}
-
-/// A camera sample of a tile that the lattice does not serve.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Unserved {
-    /// Its pixel in the tile.
-    pub pixel: usize,
-    /// Its place among its pixel's camera samples, in the order they are
-    /// offered a gather.
-    pub rank: u32,
-    pub position: Vec3,
-    pub normal: Vec3,
-    /// No lattice corner lies on its surface ([`Served::NoCorner`]), and
-    /// its material is neither glossy nor bumped.
-    pub may_share: bool,
-}
-
-/// Which samples take another's gather: for each, `None` (it gathers) or
-/// the index of a sample of its pixel, on its surface (the tests of
-/// [`Record::covers`], both ways), that gathers and ranks before it. Only
-/// samples that `may_share` share: a pixel's samples on a pier's facet, or
-/// on a thin object, would otherwise gather once per camera sample; where
-/// the light changes within the pixel each sample keeps its own gather.
-pub(crate) fn share(samples: &[Unserved], eye: Vec3) -> Vec<Option<usize>> {
-    let mut order: Vec<usize> = (0..samples.len()).collect();
-    order.sort_unstable_by_key(|&i| (samples[i].pixel, samples[i].rank, i));
-    let mut takes = vec![None; samples.len()];
-    // The current pixel's gathering samples that may share.
-    let mut leaders: Vec<usize> = Vec::new();
-    let mut pixel = usize::MAX;
-    for i in order {
-        let a = &samples[i];
-        if a.pixel != pixel {
-            pixel = a.pixel;
-            leaders.clear();
-        }
-        if !a.may_share {
-            continue;
-        }
-        let record = |u: &Unserved| Record {
-            position: u.position,
-            normal: u.normal,
-            e: Vec3::ZERO,
-        };
-        let here = record(a);
-        match leaders.iter().find(|&&j| {
-            let b = &samples[j];
-            record(b).covers(a.position, a.normal, eye) && here.covers(b.position, b.normal, eye)
-        }) {
-            Some(&j) => takes[i] = Some(j),
-            None => leaders.push(i),
-        }
-    }
-    takes
 }
 
 /// Interleaves the bits of `x` and `y`: nearby points, nearby codes.
@@ -534,31 +481,6 @@ mod tests {
         let r = record(Vec3::ZERO, Vec3::Y, 1.0).unwrap();
         assert!(!r.covers(Vec3::new(1.0, 0.1, 0.0), Vec3::Y, eye));
         assert!(r.covers(Vec3::new(1.0, 0.01, 0.0), Vec3::Y, eye));
-    }
-
-    #[test]
-    fn unserved_samples_share_a_gather_only_on_their_pixel_and_surface() {
-        let eye = Vec3::new(0.5, 1.0, 5.0);
-        let at = |pixel, rank, position: Vec3, normal, may_share| Unserved {
-            pixel,
-            rank,
-            position,
-            normal,
-            may_share,
-        };
-        let samples = [
-            // Pixel 0: two floor samples, a wall sample, a floor sample whose
-            // light changes within the pixel; the second floor sample ranks
-            // first, so it gathers.
-            at(0, 1, Vec3::new(0.1, 0.0, 0.0), Vec3::Y, true),
-            at(0, 0, Vec3::new(0.2, 0.0, 0.1), Vec3::Y, true),
-            at(0, 2, Vec3::new(1.0, 0.2, 0.1), Vec3::NEG_X, true),
-            at(0, 3, Vec3::new(0.3, 0.0, 0.0), Vec3::Y, false),
-            // Pixel 1: the floor again, but another pixel's.
-            at(1, 0, Vec3::new(0.15, 0.0, 0.0), Vec3::Y, true),
-            at(1, 1, Vec3::new(0.16, 0.0, 0.0), Vec3::Y, true),
-        ];
-        assert_eq!(share(&samples, eye), [Some(1), None, None, None, None, Some(4)]);
     }
 
     #[test]

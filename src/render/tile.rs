@@ -12,7 +12,8 @@ use glam::Vec3;
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
-use super::sparse::{Lattice, Served, Unserved, share};
+use super::share::{Group, Unserved, centre_rank, quarter, share};
+use super::sparse::{Lattice, Served};
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::rng::mix;
@@ -85,10 +86,13 @@ impl Frame<'_> {
                     match lattice.filter(|_| !per_sample) {
                         Some(l) => match l.irradiance(pp.film, sp.position, sp.normal, eye) {
                             Served::Light(e) => served.push((s, pp, e)),
-                            Served::NoCorner => own.push((s, pp, true)),
-                            Served::Changing => own.push((s, pp, false)),
+                            Served::NoCorner => own.push((s, pp, Group::Pixel)),
+                            Served::Changing => {
+                                let q = quarter(pp.film, pixels[pp.pixel]);
+                                own.push((s, pp, Group::Quarter(q)))
+                            }
                         },
-                        None => own.push((s, pp, false)),
+                        None => own.push((s, pp, Group::Alone)),
                     }
                 }
             }
@@ -135,10 +139,10 @@ impl Frame<'_> {
     /// and those that share another's gather ([`share`]), with that one's
     /// index among the former. The first sample of a pixel to gather is
     /// picked at random (per pixel, from the seed), so no stratum of the
-    /// pixel is favoured.
+    /// pixel is favoured; in a quarter, the one nearest its centre.
     fn share_gathers(
         &self,
-        own: Vec<(u32, PacketPoint, bool)>,
+        own: Vec<(u32, PacketPoint, Group)>,
         pixels: &[(u32, u32)],
         eye: Vec3,
     ) -> (Vec<(u32, PacketPoint)>, Vec<Sharing>) {
@@ -146,17 +150,21 @@ impl Frame<'_> {
         let width = self.scene.camera.width;
         let samples: Vec<Unserved> = own
             .iter()
-            .map(|(s, pp, may_share)| {
+            .map(|(s, pp, group)| {
                 let (x, y) = pixels[pp.pixel];
                 let pix = u64::from(y * width + x);
                 let start =
                     (mix(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15)) % u64::from(spp)) as u32;
+                let rank = match group {
+                    Group::Quarter(q) => centre_rank(pp.film, (x, y), *q),
+                    _ => (s + spp - start) % spp,
+                };
                 Unserved {
                     pixel: pp.pixel,
-                    rank: (s + spp - start) % spp,
+                    rank,
                     position: pp.point.position,
                     normal: pp.point.normal,
-                    may_share: *may_share,
+                    group: *group,
                 }
             })
             .collect();
