@@ -5,11 +5,12 @@
 //! loses light, which an image-wide error only averages.
 //!
 //! ```text
-//! cargo run --release --example leak -- SCENE "x,y,z[,nx,ny,nz];…" \
-//!     [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays 200000] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K]
+//! cargo run --release --example leak -- SCENE "x,y,z[,nx,ny,nz];px:X,Y;…" \
+//!     [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays 200000] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K] [--density D]
 //! ```
 //!
-//! The normal defaults to +y. `--lit` keeps the light of the surfels (and
+//! The normal defaults to +y; `px:X,Y` is where pixel (X, Y)'s camera ray
+//! through its centre hits, facing the camera. `--lit` keeps the light of the surfels (and
 //! of the ray hits) inside that box alone, so one source's share is
 //! measured with every occluder still in place. Irradiance is the mean of
 //! the three channels. BENCHMARKS.md, "The nave's indirect bias", used it
@@ -22,7 +23,7 @@ use pbgi::render::{BakeOptions, Lights, Tracer, bake};
 use pbgi::rng::Rng;
 use pbgi::{PointCloud, Surfel, Tree};
 
-const USAGE: &str = "usage: leak SCENE \"x,y,z[,nx,ny,nz];…\" [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays N] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K]";
+const USAGE: &str = "usage: leak SCENE \"x,y,z[,nx,ny,nz];px:X,Y;…\" [--omega 0.15,0.01,0.001] [--n 14,32,48] [--rays N] [--lit X0,Y0,Z0,X1,Y1,Z1] [--light-offset K] [--density D]";
 
 fn floats(s: &str) -> Result<Vec<f32>, String> {
     s.split(',')
@@ -38,7 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut omegas, mut sizes, mut rays, mut lit) =
         (vec![0.15, 0.01, 0.001], vec![14, 32, 48], 200_000u32, None);
-    let mut light_offset = 0.0;
+    let (mut light_offset, mut density) = (0.0, 2000.0);
     let mut positional = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -48,6 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--n" => sizes = value()?.split(',').map(str::parse).collect::<Result<_, _>>()?,
             "--rays" => rays = value()?.parse()?,
             "--light-offset" => light_offset = value()?.parse()?,
+            "--density" => density = value()?.parse()?,
             "--lit" => match floats(value()?)?[..] {
                 [a, b, c, d, e, f] => lit = Some((Vec3::new(a, b, c), Vec3::new(d, e, f))),
                 _ => return Err(format!("--lit takes six numbers\n{USAGE}").into()),
@@ -61,25 +63,46 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if omegas.len() != sizes.len() {
         return Err(format!("--omega and --n need as many values\n{USAGE}").into());
     }
-    let receivers = receivers
-        .split(';')
-        .map(|r| match floats(r)?[..] {
-            [x, y, z] => Ok((Vec3::new(x, y, z), Vec3::Y)),
-            [x, y, z, a, b, c] => Ok((Vec3::new(x, y, z), Vec3::new(a, b, c).normalize())),
-            _ => Err(format!("receiver {r:?}: x,y,z or x,y,z,nx,ny,nz")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
     let inside = |p: Vec3| lit.is_none_or(|(lo, hi): (Vec3, Vec3)| p.cmpge(lo).all() && p.cmple(hi).all());
 
     let scene = pbgi::scene::catalogue::resolve(scene)?;
     let tracer = Tracer::new(&scene);
+    let cam = &scene.camera;
+    let receivers = receivers
+        .split(';')
+        .map(
+            |r| match (r.strip_prefix("px:"), &floats(r.trim_start_matches("px:"))?[..]) {
+                // A pixel's centre: where its camera ray hits, the normal
+                // turned toward the camera.
+                (Some(_), &[x, y]) => {
+                    let d = cam.ray_direction(x + 0.5, y + 0.5);
+                    let hit = tracer
+                        .closest(cam.origin, d, f32::INFINITY)
+                        .ok_or_else(|| format!("pixel {r:?}: its camera ray leaves the scene"))?;
+                    let n = hit.geometric_normal;
+                    let n = if n.dot(d) > 0.0 { -n } else { n };
+                    let p = cam.origin + d * hit.t;
+                    println!(
+                        "{r}: position {:.4},{:.4},{:.4} normal {:.3},{:.3},{:.3}",
+                        p.x, p.y, p.z, n.x, n.y, n.z
+                    );
+                    Ok((p, n))
+                }
+                (None, &[x, y, z]) => Ok((Vec3::new(x, y, z), Vec3::Y)),
+                (None, &[x, y, z, a, b, c]) => Ok((Vec3::new(x, y, z), Vec3::new(a, b, c).normalize())),
+                _ => Err(format!(
+                    "receiver {r:?}: x,y,z, x,y,z,nx,ny,nz or px:X,Y (a pixel)"
+                )),
+            },
+        )
+        .collect::<Result<Vec<_>, _>>()?;
     let lights = Lights::new(&scene);
     let baked = bake(
         &scene,
         &tracer,
         &lights,
         &BakeOptions {
-            density: 2000.0,
+            density,
             ..Default::default()
         },
     )?;
