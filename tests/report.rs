@@ -209,12 +209,14 @@ fn the_committed_error_sweeps_read_back() {
 
 /// A curve whose error has a floor (its mean offset, a bias) is
 /// extrapolated along error² = floor² + c/t and never reaches an error at
-/// or below the floor, where 1/√t would claim it.
+/// or below the floor, where 1/√t would claim it; nor below the floor its
+/// last two points leave when their error falls slower than 1/√spp.
 #[test]
 fn a_curve_never_reaches_an_error_below_its_floor() {
     use Method::PointBased;
+    // Noise alone from 1 to 4 spp (the error halves), but a mean offset.
     let mut points = [
-        point(PointBased, "biased", 1, 1.0, 0.05),
+        point(PointBased, "biased", 1, 1.0, 0.07),
         point(PointBased, "biased", 4, 4.0, 0.035),
     ];
     points[1].floor = 0.03;
@@ -230,6 +232,15 @@ fn a_curve_never_reaches_an_error_below_its_floor() {
     let rows = equal_error(&points, &[0.02]);
     let r = rows[0].point_based.as_ref().unwrap().1;
     assert!(close(r.seconds, 4.0 * (0.035f64 / 0.02).powi(2)), "{r:?}");
+    // No mean offset, but an error that falls slower than 1/√spp: the
+    // floor its two points leave, error² = 0.0008 + 0.0017/spp.
+    points[0].rel_rmse = 0.05;
+    let floor = 0.0008f64.sqrt();
+    let rows = equal_error(&points, &[0.03, floor]);
+    let r = rows[0].point_based.as_ref().unwrap().1;
+    let want = 4.0 * (0.035f64.powi(2) - floor * floor) / (0.03f64.powi(2) - floor * floor);
+    assert!(close(r.seconds, want) && r.extrapolated, "{r:?} against {want}");
+    assert!(rows[1].point_based.is_none());
 }
 
 /// A whole sweep on a 16 × 16 Cornell box: every image measured, grouped

@@ -70,9 +70,12 @@ pub fn equal_error_markdown(points: &[ErrorPoint], errors: &[f64]) -> String {
     let _ = writeln!(
         s,
         "\n~ extrapolated beyond the measured points along error² = floor² + c/t, the floor \
-         being the share of the costliest point's error that its mean offset makes (a bias \
-         stays as the noise falls); — not reached (at or below that floor, or the curve's \
-         error stopped falling above it)."
+         being the larger of what the last two points leave at infinitely many samples \
+         along error² = floor² + c/spp (an error that is no mean offset stays too) and the \
+         share of the costliest point's error that its mean offset makes (a bias stays as \
+         the noise falls), with the reference's own noise (the path tracer's floor) for the \
+         point-based curves; — not reached (at or below that floor, or the curve's error \
+         stopped falling above it)."
     );
     s
 }

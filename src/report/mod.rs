@@ -29,7 +29,9 @@ pub use compare::{
     Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse, side_by_side,
 };
 pub use csv::{from_csv, to_csv};
-pub use equal_error::{EqualError, Reach, Series, equal_error, series, time_above_floor, time_for};
+pub use equal_error::{
+    EqualError, Reach, Series, equal_error, fitted_floor, series, time_above_floor, time_for,
+};
 pub use error::ReportError;
 pub use markdown::{equal_error_markdown, to_markdown};
 pub use sweep::{
