@@ -279,7 +279,7 @@ fn a_small_sweep_measures_every_curve() {
     })
     .unwrap();
     let last = last.into_inner().unwrap().unwrap();
-    assert_eq!((last.done, last.images, last.remaining_s), (9, 9, Some(0.0)));
+    assert_eq!((last.done, last.images, last.remaining_s), (11, 11, Some(0.0)));
     let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
     assert_eq!(
         order,
@@ -291,6 +291,8 @@ fn a_small_sweep_measures_every_curve() {
             ("dense gathers", 4),
             ("Ω 0.5, N 8", 1),
             ("Ω 0.5, N 8", 4),
+            ("Ω 0.5, N 8", 8),
+            ("Ω 0.5, N 8", 16),
             (PATH_TRACER, 4),
             (PATH_TRACER, 64)
         ]

@@ -155,7 +155,8 @@ const COARSE: (f32, usize) = (0.5, 8);
 
 /// The default curves: `base` (what `pbgi render` uses) at every `spp`, Ω
 /// 0.4× the base's at the higher ones, dense gathers at the lower ones, and
-/// the coarse gather [`COARSE`] at every `spp` where the base is finer.
+/// the coarse gather [`COARSE`] at every `spp` and 2× and 4× the last,
+/// where the base is finer.
 /// Curves equal to an earlier one, or left without points, are dropped.
 pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
     // Rounded to 4 decimals, so the curve's label reads `Ω 0.06`, not
@@ -187,7 +188,12 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
                 ..Variant::default()
             },
             if base.cut.max_solid_angle < COARSE.0 && base.microbuffer > COARSE.1 {
-                spp.to_vec()
+                // Cheap enough to measure two more points, 2× and 4× the
+                // last: where its error stops falling (its floor) is
+                // measured, not only fitted.
+                let last = spp.iter().copied().max().unwrap_or(1);
+                let more = [2 * last, 4 * last];
+                spp.iter().copied().chain(more).collect()
             } else {
                 Vec::new()
             },
