@@ -121,12 +121,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let tree = Tree::build(&PointCloud::new(surfels)?);
 
+    // A surfel's radius at this density: how near is near.
+    let radius = (1.0 / (std::f32::consts::PI * density)).sqrt();
     let mut rows = vec![String::from("ray cast")];
     let mut truth = Vec::new();
+    let mut near = Vec::new();
     for &(p, n) in &receivers {
         let origin = p + n * tracer.epsilon();
         let mut rng = Rng::new(9);
-        let mut sum = 0.0;
+        let (mut sum, mut within) = (0.0, [0.0; 2]);
         for i in 0..rays {
             let d = lambert_sample(n, rng.f32(), rng.f32());
             let Some(hit) = tracer.closest(origin, d, f32::INFINITY) else {
@@ -148,11 +151,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let f = material.albedo * std::f32::consts::FRAC_1_PI;
             // One area-light sample per ray, each its own point of the sequence.
             let scramble = [rng.f32().to_bits(), rng.f32().to_bits()];
-            sum += mean(lights.reflected(&tracer, q + ng * tracer.epsilon(), ng, 1, i, scramble, |_| f));
+            let l = mean(lights.reflected(&tracer, q + ng * tracer.epsilon(), ng, 1, i, scramble, |_| f));
+            sum += l;
+            for (w, k) in within.iter_mut().zip([2.0, 4.0]) {
+                if hit.t < k * radius {
+                    *w += l;
+                }
+            }
         }
         truth.push(std::f64::consts::PI * sum / f64::from(rays));
+        near.push(within.map(|w| w / sum));
     }
     rows[0] += &truth.iter().map(|e| format!(" | {e:.5}")).collect::<String>();
+    // The share of that light from surfaces within two and four surfel
+    // radii: where disks stand for the surface worst (BENCHMARKS.md,
+    // "Sponza's error floor").
+    rows.push(format!(
+        "from within 2r / 4r ({:.1} / {:.1} mm)",
+        2e3 * radius,
+        4e3 * radius
+    ));
+    rows[1] += &near
+        .iter()
+        .map(|w| format!(" | {:.0} / {:.0} %", 100.0 * w[0], 100.0 * w[1]))
+        .collect::<String>();
     for (&omega, &n) in omegas.iter().zip(&sizes) {
         let mut opts = GatherOptions::default();
         opts.cut.max_solid_angle = omega;
