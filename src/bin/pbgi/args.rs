@@ -74,7 +74,7 @@ pub struct ReportArgs {
     pub out: PathBuf,
     /// Camera samples per pixel along each point-based curve (comma-separated;
     /// default 1,2,4,8,16, the default curves of Ω 0.4× and dense gathers a part of it;
-    /// the coarse curve, Ω 0.5 and N 8, all of it).
+    /// the coarse curve, Ω 0.5 and N 8, all of it and 2× and 4× its last).
     #[arg(long, value_delimiter = ',')]
     pub spp: Option<Vec<u32>>,
     /// Paths per pixel along the path tracer's curve (comma-separated; default
