@@ -102,7 +102,12 @@ impl Bsdf<'_> {
             Some(l) if u0 < self.glossy_weight() => l.sample(n, wo, u1, u2).0,
             _ => lambert_sample(n, u1, u2),
         };
-        (n.dot(wi) > 0.0 && wi.is_finite()).then(|| wi.normalize())
+        if !wi.is_finite() {
+            // A defect, not a path to end: its pdf is NaN, which the
+            // caller reports with the pixel and sample.
+            return Some(wi);
+        }
+        (n.dot(wi) > 0.0).then(|| wi.normalize())
     }
 }
 

@@ -152,12 +152,14 @@ impl Frame<'_> {
             .iter()
             .map(|(s, pp, group)| {
                 let (x, y) = pixels[pp.pixel];
-                let pix = u64::from(y * width + x);
-                let start =
-                    (mix(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15)) % u64::from(spp)) as u32;
                 let rank = match group {
                     Group::Quarter(q) => centre_rank(pp.film, (x, y), *q),
-                    _ => (s + spp - start) % spp,
+                    _ => {
+                        let pix = u64::from(y * width + x);
+                        let start = (mix(self.opts.seed ^ pix.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+                            % u64::from(spp)) as u32;
+                        (s + spp - start) % spp
+                    }
                 };
                 Unserved {
                     pixel: pp.pixel,

@@ -91,13 +91,12 @@ pub fn fitted_floor(points: &[(u32, f64, f64)]) -> f64 {
     let [.., (s1, _, e1), (s2, _, e2)] = points else {
         return 0.0;
     };
+    if s2 <= s1 {
+        return 0.0; // two points at one spp say nothing of the floor
+    }
     let (s1, s2) = (f64::from(*s1), f64::from(*s2));
     let f2 = (e2 * e2 * s2 - e1 * e1 * s1) / (s2 - s1);
-    if s2 > s1 && f2 > 0.0 && f2.is_finite() {
-        f2.sqrt()
-    } else {
-        0.0
-    }
+    if f2 > 0.0 { f2.sqrt() } else { 0.0 }
 }
 
 /// When a curve reaches an error.
