@@ -13,13 +13,16 @@
 //! through its centre hits, facing the camera. `--lit` keeps the light of the surfels (and
 //! of the ray hits) inside that box alone, so one source's share is
 //! measured with every occluder still in place. Irradiance is the mean of
-//! the three channels. BENCHMARKS.md, "The nave's indirect bias", used it
-//! on the nave's window jambs.
+//! the three channels. Each Ω and N is gathered with the surfels alone and
+//! with the renderer's near field (rays within three surfel radii; not with
+//! `--lit`). BENCHMARKS.md, "The nave's indirect bias", used it on the
+//! nave's window jambs, and "Sponza's error floor" on receivers just above
+//! a sunlit ledge.
 
 use glam::Vec3;
 use pbgi::brdf::lambert_sample;
 use pbgi::gather::{Gather, GatherOptions};
-use pbgi::render::{BakeOptions, Lights, Tracer, bake};
+use pbgi::render::{BakeOptions, Lights, NearRays, Tracer, bake};
 use pbgi::rng::Rng;
 use pbgi::{PointCloud, Surfel, Tree};
 
@@ -180,13 +183,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         opts.cut.max_solid_angle = omega;
         opts.microbuffer = n;
         opts.cut.light_offset = light_offset;
-        let e = Gather::new(&tree, &opts)?.irradiance(&receivers)?;
-        let cells: String = e
-            .iter()
-            .zip(&truth)
-            .map(|(&e, &t)| format!(" | {:.5} ({:+.0} %)", mean(e), 100.0 * (mean(e) / t - 1.0)))
-            .collect();
-        rows.push(format!("Ω {omega}, N {n}{cells}"));
+        let cells = |e: Vec<Vec3>| -> String {
+            e.iter()
+                .zip(&truth)
+                .map(|(&e, &t)| format!(" | {:.5} ({:+.0} %)", mean(e), 100.0 * (mean(e) / t - 1.0)))
+                .collect()
+        };
+        let gather = Gather::new(&tree, &opts)?;
+        rows.push(format!("Ω {omega}, N {n}{}", cells(gather.irradiance(&receivers)?)));
+        // With the renderer's near field (not with `--lit`: its rays' hits
+        // would keep every light).
+        if lit.is_none() {
+            let rays = NearRays {
+                scene: &scene,
+                tracer: &tracer,
+                lights: &lights,
+                light_samples: 16,
+                seed: 1,
+            };
+            let e = gather.with_near_field(&rays).irradiance(&receivers)?;
+            rows.push(format!("Ω {omega}, N {n}, near field by rays{}", cells(e)));
+        }
     }
     let head: String = receivers.iter().map(|(p, n)| format!(" | {p} n {n}")).collect();
     println!("| irradiance{head} |\n|---{} |", " | ---".repeat(receivers.len()));

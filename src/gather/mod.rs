@@ -82,7 +82,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::{CutOptions, Receiver, Scheme, SchemeChoice, Traversal};
 use crate::environment::Environment;
 use crate::error::{Error, Invalid};
-use crate::microbuffer::{Convolution, MicroBuffer};
+use crate::microbuffer::{Convolution, MicroBuffer, NearField};
 use crate::simd::{Isa, LANES};
 use crate::tree::Tree;
 
@@ -195,6 +195,8 @@ pub struct Gather<'t> {
     proto: MicroBuffer,
     opts: GatherOptions,
     path: GatherPath,
+    /// The scene along short rays, where leaves are too near to stand for it.
+    near: Option<&'t dyn NearField>,
 }
 
 impl<'t> Gather<'t> {
@@ -219,7 +221,17 @@ impl<'t> Gather<'t> {
             proto,
             opts: opts.clone(),
             path,
+            near: None,
         })
+    }
+
+    /// This gather, drawing what lies within a few surfel radii of a
+    /// receiver by rays into `field` ([`microbuffer::NearField`](crate::microbuffer::NearField)):
+    /// where a receiver's cut holds a leaf of another surface that near,
+    /// those leaves give way to one ray per pixel.
+    pub fn with_near_field(mut self, field: &'t dyn NearField) -> Self {
+        self.near = Some(field);
+        self
     }
 
     /// The path this gather takes.

@@ -7,7 +7,9 @@ use glam::Vec3;
 use super::{Gather, Pipeline};
 use crate::cut::{CutSink, Receiver, Scheme, Traversal, TraversalStats};
 use crate::error::Error;
-use crate::microbuffer::{Convolution, MicroBuffer, PacketCut, shade_cuts, shade_packet};
+use crate::microbuffer::{
+    Convolution, MicroBuffer, NearField, PacketCut, shade_cuts_near, shade_packet_near,
+};
 use crate::simd::{Isa, LANES};
 use crate::tree::{NodeId, Tree};
 
@@ -74,11 +76,18 @@ impl PacketCuts {
 
     /// Splats the cuts into `bufs` (one per receiver, reset to it) through
     /// the pipeline on path `isa`, and convolves.
-    fn shade(&mut self, isa: Isa, tree: &Tree, bufs: &mut [MicroBuffer], what: Convolution) -> Vec<Vec3> {
+    fn shade(
+        &mut self,
+        isa: Isa,
+        tree: &Tree,
+        bufs: &mut [MicroBuffer],
+        what: Convolution,
+        near: Option<&dyn NearField>,
+    ) -> Vec<Vec3> {
         let mut out = vec![Vec3::ZERO; bufs.len()];
         let shaded = match self {
-            PacketCuts::Lists(l) => shade_cuts(isa, bufs, tree, &l.0, what, &mut out),
-            PacketCuts::Lanes(c) => shade_packet(isa, bufs, tree, c, what, &mut out),
+            PacketCuts::Lists(l) => shade_cuts_near(isa, bufs, tree, &l.0, what, near, &mut out),
+            PacketCuts::Lanes(c) => shade_packet_near(isa, bufs, tree, c, what, near, &mut out),
         };
         // The path is the traversal's (detected) and a packet is at most 16
         // receivers with a list and a buffer each: nothing data can break.
@@ -127,7 +136,7 @@ impl<'g, 't> Gatherer<'g, 't> {
             b.reset(r.position(), r.normal());
         }
         let g = self.gather;
-        self.cuts.shade(g.path.isa, g.tree(), bufs, what)
+        self.cuts.shade(g.path.isa, g.tree(), bufs, what, g.near)
     }
 
     /// The microbuffers of the last shaded packet, one per receiver (for

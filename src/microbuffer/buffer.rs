@@ -8,6 +8,7 @@ use glam::Vec3;
 use super::compose;
 pub(crate) use super::fragments::Fragments;
 use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
+use super::near::{self, Near, NearField};
 use super::table::Table;
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
@@ -48,6 +49,8 @@ pub struct MicroBuffer {
     pub(super) environment: Option<Arc<Environment>>,
     /// The composition's working memory, reused from receiver to receiver.
     pub(super) scratch: compose::Scratch,
+    /// What this receiver sees within a few surfel radii, by rays (`near`).
+    pub(super) near: Option<Near>,
 }
 
 impl MicroBuffer {
@@ -72,6 +75,7 @@ impl MicroBuffer {
             frags: Fragments::default(),
             environment: None,
             scratch: compose::Scratch::default(),
+            near: None,
         })
     }
 
@@ -105,6 +109,7 @@ impl MicroBuffer {
         self.position = position;
         self.frame = [t, bt, n];
         self.frags.clear();
+        self.near = None;
     }
 
     #[inline]
@@ -207,7 +212,11 @@ impl MicroBuffer {
     /// buffer's own working memory.
     #[inline(always)]
     pub(crate) fn irradiance_inline(&mut self, tree: &Tree) -> Vec3 {
-        let site = self.site();
+        let site = compose::Site {
+            position: self.position,
+            frame: self.frame,
+            near: self.near.as_ref(),
+        };
         // The sky from the fields, not `sky()`: that would borrow the whole
         // buffer, whose working memory the composition writes.
         let sky = compose::Sky::of(self.environment.as_deref(), self.frame);
@@ -223,10 +232,11 @@ impl MicroBuffer {
 
     /// The receiver, for the composition.
     #[inline(always)]
-    fn site(&self) -> compose::Site {
+    fn site(&self) -> compose::Site<'_> {
         compose::Site {
             position: self.position,
             frame: self.frame,
+            near: self.near.as_ref(),
         }
     }
 
@@ -270,8 +280,29 @@ impl MicroBuffer {
     /// buffer's own working memory.
     #[inline(always)]
     pub(crate) fn occlusion_inline(&mut self, tree: &Tree) -> f32 {
-        let site = self.site();
+        let site = compose::Site {
+            position: self.position,
+            frame: self.frame,
+            near: self.near.as_ref(),
+        };
         compose::occlusion(&self.table, &self.frags, tree, &site, &mut self.scratch)
+    }
+
+    /// Computes the near field this receiver needs (`near`) from `field`
+    /// and keeps it for the convolutions: where the splats so far hold a
+    /// leaf of another surface within [`NEAR_RADII`](super::NEAR_RADII) of
+    /// its radius, the leaves that near give way to one ray per pixel;
+    /// elsewhere nothing changes. Returns whether it needs one. Call it after
+    /// the last splat; [`reset`](Self::reset) forgets it.
+    pub fn set_near_field(&mut self, tree: &Tree, field: &dyn NearField) -> bool {
+        let nodes = self.frags.key.iter().map(|&k| (k & 0xFFFF_FFFF) as NodeId);
+        self.near = near::near(&self.table, nodes, tree, self.position, &self.frame, field);
+        self.near.is_some()
+    }
+
+    /// The near field the convolutions use, if this receiver has one.
+    pub fn near(&self) -> Option<&Near> {
+        self.near.as_ref()
     }
 
     /// Fragments left by the splats so far (for counters and tests).

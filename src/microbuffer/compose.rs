@@ -35,6 +35,7 @@ use glam::Vec3;
 use std::simd::prelude::*;
 
 use super::fragments::Fragments;
+use super::near::Near;
 use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, lanes};
 use super::table::Table;
 use crate::environment::Environment;
@@ -99,9 +100,11 @@ fn sort(v: &mut [Sorted]) {
 
 /// The receiver a microbuffer belongs to: its position and local frame
 /// (x, y, z = normal, in world space).
-pub(crate) struct Site {
+pub(crate) struct Site<'a> {
     pub position: Vec3,
     pub frame: [Vec3; 3],
+    /// Leaves drawn by rays, and what each pixel's ray met (`near`).
+    pub near: Option<&'a Near>,
 }
 
 /// The composition's working memory, kept by a microbuffer from one
@@ -114,6 +117,8 @@ pub(crate) struct Scratch {
     /// One shape per splat (its fragments are consecutive), and the
     /// facets of the mixed ones.
     shapes: Vec<Packed>,
+    /// Per shape: left out for the near field's rays.
+    skipped: Vec<bool>,
     mixed: Vec<Facets>,
     /// Per fragment: its splat's shape.
     shape_of: Vec<u32>,
@@ -154,6 +159,7 @@ pub(crate) fn compose(
     let (pixels, n) = (t.dir.len(), frags.len());
     let Scratch {
         shapes,
+        skipped,
         mixed,
         shape_of,
         start,
@@ -169,6 +175,7 @@ pub(crate) fn compose(
     // show more than its surfels send, which the irradiance's bound must
     // not follow).
     shapes.clear();
+    skipped.clear();
     mixed.clear();
     shape_of.clear();
     let mut brightest = Vec3::ZERO;
@@ -188,9 +195,15 @@ pub(crate) fn compose(
             };
             let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample, index);
             shapes.push(shape.pack());
+            skipped.push(site.near.is_some_and(|n| n.skips(node)));
             last = Some(node);
         }
         shape_of.push(shapes.len() as u32 - 1);
+    }
+    if let (true, Some(near)) = (radiance, site.near) {
+        for l in near.pixels.iter().flatten() {
+            brightest = brightest.max(*l);
+        }
     }
     // Bucket by pixel (a counting sort: O(n)).
     start.clear();
@@ -217,6 +230,14 @@ pub(crate) fn compose(
     out_radiance.resize(if radiance { pixels } else { 0 }, Vec3::ZERO);
     let zero = F32s::splat(0.0);
     for p in 0..pixels {
+        // A near surface met by the pixel's ray hides everything else.
+        if let Some(l) = site.near.and_then(|n| n.pixels[p]) {
+            out_cover[p] = 1.0;
+            if radiance {
+                out_radiance[p] = l;
+            }
+            continue;
+        }
         let bucket = &mut sorted[start[p] as usize..start[p + 1] as usize];
         if bucket.is_empty() {
             continue;
@@ -235,7 +256,11 @@ pub(crate) fn compose(
         seen.clear();
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
         for &(_, i) in bucket.iter() {
-            let shape = Shape::unpack(&shapes[shape_of[i as usize] as usize]);
+            let k = shape_of[i as usize] as usize;
+            if skipped[k] {
+                continue;
+            }
+            let shape = Shape::unpack(&shapes[k]);
             let l = lanes(&shape, &px, frags.cover[i as usize], mixed);
             let nearer = (zero.simd_lt(l.cover) | l.hide) & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);

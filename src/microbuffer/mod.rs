@@ -38,6 +38,7 @@ mod compose;
 mod draw;
 mod fragments;
 mod locate;
+mod near;
 mod plan;
 mod samples;
 mod shade;
@@ -45,7 +46,9 @@ mod table;
 mod tiles;
 
 pub use buffer::{MicroBuffer, MicroBufferSink};
+pub use near::{NEAR_RADII, Near, NearField};
 pub use shade::{Convolution, PacketCut, shade_cuts, shade_packet};
+pub(crate) use shade::{shade_cuts_near, shade_packet_near};
 
 #[cfg(test)]
 mod tests;

@@ -19,6 +19,7 @@ use glam::Vec3;
 
 use super::buffer::{MicroBuffer, key};
 use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
+use super::near::NearField;
 use super::plan::{
     ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach,
 };
@@ -126,6 +127,20 @@ pub fn shade_cuts(
     what: Convolution,
     out: &mut [Vec3],
 ) -> Result<(), Error> {
+    shade_cuts_near(isa, bufs, tree, cuts, what, None, out)
+}
+
+/// [`shade_cuts`], each receiver with its near field from `near` (where it
+/// needs one: [`MicroBuffer::set_near_field`]).
+pub(crate) fn shade_cuts_near(
+    isa: Isa,
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cuts: &[Vec<NodeId>],
+    what: Convolution,
+    near: Option<&dyn NearField>,
+    out: &mut [Vec3],
+) -> Result<(), Error> {
     isa.require()?;
     if cuts.len() < bufs.len() || out.len() < bufs.len() {
         return Err(Error::InvalidParameter {
@@ -146,6 +161,7 @@ pub fn shade_cuts(
             tree,
             cuts,
             what,
+            near,
             out,
         },
     );
@@ -166,6 +182,19 @@ pub fn shade_packet(
     tree: &Tree,
     cut: &mut PacketCut,
     what: Convolution,
+    out: &mut [Vec3],
+) -> Result<(), Error> {
+    shade_packet_near(isa, bufs, tree, cut, what, None, out)
+}
+
+/// [`shade_packet`], each receiver with its near field from `near`.
+pub(crate) fn shade_packet_near(
+    isa: Isa,
+    bufs: &mut [MicroBuffer],
+    tree: &Tree,
+    cut: &mut PacketCut,
+    what: Convolution,
+    near: Option<&dyn NearField>,
     out: &mut [Vec3],
 ) -> Result<(), Error> {
     isa.require()?;
@@ -195,6 +224,7 @@ pub fn shade_packet(
                 tree,
                 cut,
                 what,
+                near,
                 out,
             },
         );
@@ -209,6 +239,7 @@ struct ShadeCuts<'a> {
     tree: &'a Tree,
     cuts: &'a [Vec<NodeId>],
     what: Convolution,
+    near: Option<&'a dyn NearField>,
     out: &'a mut [Vec3],
 }
 
@@ -216,7 +247,7 @@ impl Kernel for ShadeCuts<'_> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
-        cuts_body(self.bufs, self.tree, self.cuts, self.what, self.out)
+        cuts_body(self.bufs, self.tree, self.cuts, self.what, self.near, self.out)
     }
 }
 
@@ -227,6 +258,7 @@ struct ShadePacket<'a> {
     tree: &'a Tree,
     cut: &'a mut PacketCut,
     what: Convolution,
+    near: Option<&'a dyn NearField>,
     out: &'a mut [Vec3],
 }
 
@@ -234,7 +266,9 @@ impl Kernel for ShadePacket<'_> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
-        packet_body(self.t, self.bufs, self.tree, self.cut, self.what, self.out)
+        packet_body(
+            self.t, self.bufs, self.tree, self.cut, self.what, self.near, self.out,
+        )
     }
 }
 
@@ -244,6 +278,7 @@ fn cuts_body(
     tree: &Tree,
     cuts: &[Vec<NodeId>],
     what: Convolution,
+    near: Option<&dyn NearField>,
     out: &mut [Vec3],
 ) {
     for ((mb, cut), o) in bufs.iter_mut().zip(cuts).zip(out.iter_mut()) {
@@ -255,10 +290,7 @@ fn cuts_body(
                 mb.apply(rec, node, &l);
             }
         }
-        *o = match what {
-            Convolution::Irradiance => mb.irradiance_inline(tree),
-            Convolution::Occlusion => Vec3::splat(mb.occlusion_inline(tree)),
-        };
+        *o = convolve(mb, tree, what, near);
     }
 }
 
@@ -269,6 +301,7 @@ fn packet_body(
     tree: &Tree,
     cut: &mut PacketCut,
     what: Convolution,
+    near: Option<&dyn NearField>,
     out: &mut [Vec3],
 ) {
     if bufs.iter().any(|b| b.table.n != t.n) {
@@ -282,7 +315,7 @@ fn packet_body(
                     mb.apply(rec, node, &l);
                 }
             }
-            *o = convolve(mb, tree, what);
+            *o = convolve(mb, tree, what, near);
         }
         return;
     }
@@ -392,7 +425,7 @@ fn packet_body(
         }
     }
     for (mb, o) in bufs.iter_mut().zip(out.iter_mut()) {
-        *o = convolve(mb, tree, what);
+        *o = convolve(mb, tree, what, near);
     }
 }
 
@@ -470,7 +503,10 @@ impl BoxLanes {
 /// The convolution `what` of one buffer: the composition both pipelines
 /// share (`compose`).
 #[inline(always)]
-fn convolve(mb: &mut MicroBuffer, tree: &Tree, what: Convolution) -> Vec3 {
+fn convolve(mb: &mut MicroBuffer, tree: &Tree, what: Convolution, near: Option<&dyn NearField>) -> Vec3 {
+    if let Some(field) = near {
+        mb.set_near_field(tree, field);
+    }
     match what {
         Convolution::Irradiance => mb.irradiance_inline(tree),
         Convolution::Occlusion => Vec3::splat(mb.occlusion_inline(tree)),

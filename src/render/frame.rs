@@ -136,6 +136,15 @@ impl<'s> Frame<'s> {
             skipped: (scheme != Scheme::Hybrid).then(|| format!("scheme {scheme}")),
         });
         stages.push(Stage {
+            name: "near field by rays (within 3 surfel radii)",
+            skipped: (!near_field(opts)).then(|| {
+                format!(
+                    "--bounces {}: the surfels carry bounces the rays' hits would not",
+                    opts.bounces
+                )
+            }),
+        });
+        stages.push(Stage {
             name: "direct light at receivers",
             skipped: (opts.ao || lights.is_empty()).then(|| {
                 if opts.ao {
@@ -184,7 +193,24 @@ impl<'s> Frame<'s> {
 
     /// [`gather`](Self::gather) with another scheme (for benchmarks).
     pub(crate) fn gather_with(&self, scheme: SchemeChoice) -> Result<Gather<'_>, Error> {
-        Gather::new(&self.tree, &gather_options(&self.opts, scheme, &self.environment))
+        let g = Gather::new(&self.tree, &gather_options(&self.opts, scheme, &self.environment))?;
+        Ok(self.with_near_field(g))
+    }
+
+    /// Whether receivers see within a few surfel radii by rays
+    /// (`microbuffer::near`).
+    pub(crate) fn near_field(&self) -> bool {
+        near_field(&self.opts)
+    }
+
+    /// `g`, with this frame's ray tracer as its near field where
+    /// [`near_field`](Self::near_field) says so.
+    fn with_near_field<'a>(&'a self, g: Gather<'a>) -> Gather<'a> {
+        if self.near_field() {
+            g.with_near_field(self)
+        } else {
+            g
+        }
     }
 
     /// Whether receivers with a glossy lobe gather apart: some material has
@@ -203,7 +229,7 @@ impl<'s> Frame<'s> {
         o.cut.max_solid_angle = self.opts.glossy_max_solid_angle;
         o.cut.light_offset = self.opts.glossy_light_offset;
         o.microbuffer = self.opts.glossy_microbuffer;
-        Gather::new(&self.tree, &o).map(Some)
+        Gather::new(&self.tree, &o).map(|g| Some(self.with_near_field(g)))
     }
 
     /// The window rendered: the crop, or the whole frame.
@@ -458,4 +484,11 @@ pub fn render(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<RenderOutput, RenderError> {
     Frame::prepare(scene, opts)?.render(progress)
+}
+
+/// Whether receivers see within a few surfel radii by rays: the rays'
+/// hits are shaded with direct light, which is what the surfels carry
+/// unless extra bounces were gathered at them.
+fn near_field(opts: &RenderOptions) -> bool {
+    opts.ao || opts.bounces <= 1
 }

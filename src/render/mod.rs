@@ -23,6 +23,7 @@ mod bounces;
 mod frame;
 mod image;
 mod light;
+mod near;
 mod options;
 mod output;
 pub mod reference;
@@ -38,6 +39,7 @@ pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use image::Image;
 pub use light::Lights;
+pub use near::NearRays;
 pub use options::{
     Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
 };
