@@ -25,7 +25,37 @@ use crate::tree::{NodeId, Tree};
 pub const NEAR_RADII: f32 = 2.0;
 
 /// What lies along short rays from a receiver: the scene itself, which the
-/// surfels only stand for. Implemented by the renderer over its ray tracer.
+/// surfels only stand for. Implemented by the renderer over its ray tracer
+/// ([`NearRays`](crate::render::NearRays)).
+///
+/// ```
+/// use glam::Vec3;
+/// use pbgi::gather::{Gather, GatherOptions};
+/// use pbgi::microbuffer::NearField;
+/// use pbgi::{PointCloud, Surfel, Tree};
+///
+/// /// The floor z = 0, lit at radiance 1.
+/// struct Floor;
+/// impl NearField for Floor {
+///     fn trace(&self, o: Vec3, _n: Vec3, d: Vec3, t_max: f32) -> Option<Vec3> {
+///         (d.z < 0.0 && -o.z / d.z <= t_max).then_some(Vec3::ONE)
+///     }
+/// }
+///
+/// // Floor surfels, 2 cm apart, and a receiver on a wall 3 mm above them.
+/// let mut surfels = Vec::new();
+/// for i in 0..50 {
+///     for j in 0..50 {
+///         let position = Vec3::new(-0.5 + i as f32 * 0.02, -0.5 + j as f32 * 0.02, 0.0);
+///         surfels.push(Surfel { position, normal: Vec3::Z, radius: 0.0113, radiance: Vec3::ONE });
+///     }
+/// }
+/// let tree = Tree::build(&PointCloud::new(surfels)?);
+/// let gather = Gather::new(&tree, &GatherOptions::default())?.with_near_field(&Floor);
+/// let e = gather.irradiance(&[(Vec3::new(0.01, 0.0, 0.003), Vec3::X)])?;
+/// assert!((e[0].x / (std::f32::consts::PI / 2.0) - 1.0).abs() < 0.05); // half the hemisphere
+/// # Ok::<(), pbgi::Error>(())
+/// ```
 pub trait NearField: Sync {
     /// The radiance the first surface along unit `dir` from `origin` (a
     /// receiver with unit `normal`) sends back along `−dir`, if that surface
