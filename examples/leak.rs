@@ -190,7 +190,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .collect()
         };
         let gather = Gather::new(&tree, &opts)?;
-        rows.push(format!("Ω {omega}, N {n}{}", cells(gather.irradiance(&receivers)?)));
+        rows.push(format!(
+            "Ω {omega}, N {n}{}",
+            cells(gather.irradiance(&receivers)?)
+        ));
         // With the renderer's near field (not with `--lit`: its rays' hits
         // would keep every light).
         if lit.is_none() {

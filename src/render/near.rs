@@ -62,7 +62,10 @@ impl NearField for NearRays<'_> {
             [h as u32, (h >> 32) as u32],
             |_| f,
         );
-        Some(l.min(Vec3::splat(MAX_RADIANCE)))
+        // Saturates as the surfels do (`bake`); a non-finite value is kept,
+        // for the gather's own report to name (`min` would hide a NaN).
+        let max = Vec3::splat(MAX_RADIANCE);
+        Some(Vec3::select(l.cmpgt(max), max, l))
     }
 }
 
