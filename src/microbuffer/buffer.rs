@@ -294,8 +294,12 @@ impl MicroBuffer {
     /// its radius, the leaves that near give way to one ray per pixel;
     /// elsewhere nothing changes. Returns whether it needs one. Call it after
     /// the last splat; [`reset`](Self::reset) forgets it.
+    #[inline(always)]
     pub fn set_near_field(&mut self, tree: &Tree, field: &dyn NearField) -> bool {
-        let nodes = self.frags.key.iter().map(|&k| (k & 0xFFFF_FFFF) as NodeId);
+        let nodes = self.frags.key.iter().map(
+            #[inline(always)]
+            |&k| (k & 0xFFFF_FFFF) as NodeId,
+        );
         self.near = near::near(&self.table, nodes, tree, self.position, &self.frame, field);
         self.near.is_some()
     }

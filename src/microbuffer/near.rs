@@ -90,6 +90,7 @@ impl Near {
 /// to it (within 30°) and within half its radius of the receiver's plane.
 /// Such leaves lie at the horizon, where they show nothing; they alone never
 /// call for rays (every receiver's cut holds a few).
+#[inline(always)]
 fn coplanar(tree: &Tree, node: NodeId, position: Vec3, normal: Vec3) -> bool {
     let (c, r) = tree.sphere(node);
     tree.mean_normal(node).dot(normal) > 0.866 && (c - position).dot(normal).abs() < 0.5 * r
@@ -98,7 +99,9 @@ fn coplanar(tree: &Tree, node: NodeId, position: Vec3, normal: Vec3) -> bool {
 /// The near field of the receiver at `position` (local frame `frame`)
 /// whose splatted nodes are `nodes` (in any order, repeats allowed), or
 /// `None` where none of them is a leaf of another surface within
-/// [`NEAR_RADII`] of its radius.
+/// [`NEAR_RADII`] of its radius. Inlined into the shading clones, like
+/// everything they run (scripts/check-asm.sh).
+#[inline(always)]
 pub(super) fn near(
     t: &Table,
     nodes: impl Iterator<Item = NodeId>,
@@ -126,14 +129,12 @@ pub(super) fn near(
     }
     skip.sort_unstable();
     skip.dedup();
-    let pixels = t
-        .dir
-        .iter()
-        .map(|l| {
-            let d = (frame[0] * l.x + frame[1] * l.y + frame[2] * l.z).normalize();
-            field.trace(position, normal, d, reach)
-        })
-        .collect();
+    // A loop, not `collect`: its `from_iter` would stay out of line.
+    let mut pixels = Vec::with_capacity(t.dir.len());
+    for l in &t.dir {
+        let d = (frame[0] * l.x + frame[1] * l.y + frame[2] * l.z).normalize();
+        pixels.push(field.trace(position, normal, d, reach));
+    }
     Some(Near { skip, pixels })
 }
 
