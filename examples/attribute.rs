@@ -2,9 +2,13 @@
 //! cluster of the cut is replaced by the leaves below it (the rest of the
 //! cut kept) and the change in irradiance is its share. For the clusters
 //! with the largest shares it also shows how much of their surface the
-//! receiver really sees, and the radiance of what it sees: a cluster shows
-//! the mean of all its surfels that face the receiver, whether they are in
-//! view or not.
+//! receiver really sees (rays to each leaf), and the radiance of what it
+//! sees: a cluster shows the mean of all its surfels that face the
+//! receiver, whether they are in view or not. And by irradiance: what the
+//! cluster adds in the microbuffer (`shown`), what its leaves add to the
+//! leaves' cut, what it would add with nothing in the way (`unoccluded`)
+//! and what the rays find (`ray cast`), with the mesh that hides most of
+//! its leaves.
 //!
 //! ```text
 //! cargo run --release --example attribute -- SCENE "x,y,z[,nx,ny,nz]" [--omega 0.15] [--n 14] [--top 12] [--density 2000]
@@ -125,30 +129,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sum: f64 = shares.iter().map(|s| s.0).sum();
     println!("sum of the clusters' shares {sum:+.5}\n");
     println!(
-        "| node | share | centre | R | distance | mean normal's length | radiance | not behind its own leaves | their radiance | in view | radiance in view |"
+        "| node | share | centre | R | distance | mean normal's length | radiance | not behind its own leaves | in view | radiance in view | shown | its leaves shown | unoccluded | ray cast | most hidden by |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let origin = p + normal * tracer.epsilon();
     for &(share, k) in shares.iter().take(top) {
-        // The node's leaves that face the receiver, by projected solid
-        // angle: all of them, and those a ray from the receiver reaches.
-        // Also: those that no disk of the node's own leaves hides.
-        let (mut all, mut all_l, mut seen, mut seen_l) = (0.0, 0.0, 0.0, 0.0);
-        let (mut own, mut own_l) = (0.0, 0.0);
-        let disks: Vec<_> = below
-            .get(&k)
-            .into_iter()
-            .flatten()
+        let mine: &[NodeId] = below.get(&k).map_or(&[], |b| &b[..]);
+        // What the node adds to the irradiance in the microbuffer, and what
+        // its leaves add to the leaves' cut.
+        let rest: Vec<NodeId> = coarse.iter().copied().filter(|&x| x != k).collect();
+        let shown = e - irradiance(&mut rest.iter().copied());
+        let own: HashSet<NodeId> = mine.iter().copied().collect();
+        let others: Vec<NodeId> = leaves.iter().copied().filter(|x| !own.contains(x)).collect();
+        let leaves_shown = e_leaves - irradiance(&mut others.iter().copied());
+        // Its leaves that face the receiver: by projected solid angle (`w`),
+        // all of them, those no disk of the node's own leaves hides, those a
+        // ray from the receiver reaches; by irradiance (`w·cos`, the mean
+        // radiance), all of them and those a ray reaches; and what the rays
+        // that do not reach them hit first.
+        let disks: Vec<(Vec3, Vec3, f32, pbgi::NodeView)> = mine
+            .iter()
             .map(|&l| {
                 let v = tree.node(l);
-                (
-                    v.centroid,
-                    v.normal.normalize_or_zero(),
-                    v.area / std::f32::consts::PI,
-                    v,
-                )
+                let n = v.normal.normalize_or_zero();
+                (v.centroid, n, v.area / std::f32::consts::PI, v)
             })
             .collect();
+        let (mut all, mut all_l, mut seen, mut seen_l, mut alone) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut unoccluded, mut cast) = (0.0, 0.0);
+        let mut hiders: HashMap<&str, usize> = HashMap::new();
         for (j, (c, _, _, v)) in disks.iter().enumerate() {
             let to = *c - origin;
             let d = to.length();
@@ -157,24 +166,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if w == 0.0 {
                 continue;
             }
+            let l = mean(v.radiance);
+            let e = w * f64::from(normal.dot(u).max(0.0)) * l;
             all += w;
-            all_l += w * mean(v.radiance);
-            if !tracer.occluded(origin, u, d - 2.0 * tracer.epsilon()) {
-                seen += w;
-                seen_l += w * mean(v.radiance);
+            all_l += w * l;
+            unoccluded += e;
+            match tracer.closest(origin, u, d - 2.0 * tracer.epsilon()) {
+                None => {
+                    seen += w;
+                    seen_l += w * l;
+                    cast += e;
+                }
+                Some(h) => *hiders.entry(&scene.meshes[h.mesh as usize].name).or_default() += 1,
             }
             let hidden = disks.iter().enumerate().any(|(i, &(ci, ni, r2, _))| {
                 let t = ni.dot(ci - origin) / ni.dot(u);
                 i != j && t > 0.0 && t < d * (1.0 - 1e-4) && (origin + u * t).distance_squared(ci) < r2
             });
             if !hidden {
-                own += w;
-                own_l += w * mean(v.radiance);
+                alone += w;
             }
         }
+        let most = hiders
+            .iter()
+            .max_by_key(|&(name, n)| (*n, std::cmp::Reverse(*name)))
+            .map_or(String::from("—"), |(name, n)| format!("{name} ({n} leaves)"));
         let v = tree.node(k);
         println!(
-            "| {k} | {share:+.5} | {:.2}, {:.2}, {:.2} | {:.3} | {:.2} | {:.2} | {:.4} | {:.0} % | {:.4} | {:.0} % | {:.4} |",
+            "| {k} | {share:+.5} | {:.2}, {:.2}, {:.2} | {:.3} | {:.2} | {:.2} | {:.4} | {:.0} % | {:.0} % | {:.4} | {shown:.5} | {leaves_shown:.5} | {unoccluded:.5} | {cast:.5} | {most} |",
             v.center.x,
             v.center.y,
             v.center.z,
@@ -182,8 +201,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             v.center.distance(p),
             v.normal.length(),
             all_l / all,
-            100.0 * own / all,
-            own_l / own,
+            100.0 * alone / all,
             100.0 * seen / all,
             seen_l / seen
         );
