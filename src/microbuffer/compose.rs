@@ -10,7 +10,9 @@
 //! the footprint's placement may be off; a cluster that faces several ways
 //! shows each facet's disk on its plane, or, curved, a cone `±R` deep).
 //! At each sub-sample the *front layer* is every fragment
-//! whose interval reaches the nearest fragment's: one surface, seen through
+//! whose interval reaches the nearest fragment's, unless its centre lies
+//! behind the plane of the fragment nearest in depth
+//! (`samples::wholly_behind`): one surface, seen through
 //! several splats, whose coverage adds unclamped (the disks of a surface
 //! tile it about once, so a clamp at one would lose the overlaps and keep
 //! the gaps). Everything behind adds through `1 − κ·coverage` of the front
@@ -36,7 +38,7 @@ use std::simd::prelude::*;
 
 use super::fragments::Fragments;
 use super::near::Near;
-use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, lanes};
+use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, lanes, wholly_behind};
 use super::table::Table;
 use crate::environment::Environment;
 use crate::simd::{F32s, M32s, Real, sum};
@@ -127,8 +129,9 @@ pub(crate) struct Scratch {
     next: Vec<u32>,
     /// The fragments bucketed by pixel.
     sorted: Vec<Sorted>,
-    /// One pixel's fragments at its sub-samples.
-    seen: Vec<(F32s, F32s, M32s, u32)>,
+    /// One pixel's fragments at its sub-samples: coverage, near depth,
+    /// what it hides, its index and its body (`Lanes`).
+    seen: Vec<(F32s, F32s, M32s, u32, [F32s; 4])>,
     /// The composed pixels: per pixel the effective coverage and the
     /// radiance it lets through (empty when only coverage was asked for).
     pub cover: Vec<f32>,
@@ -252,9 +255,14 @@ pub(crate) fn compose(
             uz: F32s::from_array(*sz),
             size: t.pixel_size[p] * 0.25,
         };
-        // The nearest fragment at each sub-sample, and its far depth.
+        // At each sub-sample: the far depth of the fragment whose interval
+        // starts nearest, and the plane of the one whose depth is nearest
+        // (a surface seen at a grazing angle has a wide interval, whose
+        // start may come before the facing surface in front of it).
         seen.clear();
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
+        let mut plane = [zero, zero, zero, F32s::splat(f32::NEG_INFINITY)];
+        let mut depth = F32s::splat(f32::INFINITY);
         for &(_, i) in bucket.iter() {
             let k = shape_of[i as usize] as usize;
             if skipped[k] {
@@ -262,18 +270,26 @@ pub(crate) fn compose(
             }
             let shape = Shape::unpack(&shapes[k]);
             let l = lanes(&shape, &px, frags.cover[i as usize], mixed);
-            let nearer = (zero.simd_lt(l.cover) | l.hide) & l.near.simd_lt(nearest);
+            let drawn = zero.simd_lt(l.cover) | l.hide;
+            let nearer = drawn & l.near.simd_lt(nearest);
             nearest = F32s::select(nearer, l.near, nearest);
             reach = F32s::select(nearer, l.far, reach);
-            seen.push((l.cover, l.near, l.hide, i));
+            let mid = (l.near + l.far) * F32s::splat(0.5);
+            let closer = drawn & mid.simd_lt(depth);
+            depth = F32s::select(closer, mid, depth);
+            for c in 0..4 {
+                plane[c] = F32s::select(closer, l.plane[c], plane[c]);
+            }
+            seen.push((l.cover, l.near, l.hide, i, l.body));
         }
-        // The front layer (what reaches the nearest fragment's far depth),
-        // what it hides outright, and what lies behind it.
+        // The front layer (what reaches that far depth and is not wholly
+        // behind that plane), what it hides outright, and what lies behind
+        // it.
         let (mut front, mut behind) = (zero, zero);
         let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
         let mut hidden = M32s::splat(false);
-        for &(cover, near, hide, i) in seen.iter() {
-            let in_front = near.simd_le(reach);
+        for &(cover, near, hide, i, body) in seen.iter() {
+            let in_front = near.simd_le(reach) & !wholly_behind(&plane, &body);
             hidden |= hide & in_front;
             let a = F32s::select(in_front, cover, zero);
             let b = cover - a;

@@ -1,0 +1,107 @@
+//! What lies wholly behind a nearer surface stays hidden, where the two are
+//! closer than a cluster's depth interval is wide: a lit jamb of a window
+//! opening just behind the wall that hides it (the nave's floor saw the
+//! clerestory's sunlit jambs through the arcade wall's 0.12-deep openings,
+//! +10 % of its indirect light at Ω 0.01). The exact answer is nothing: a
+//! black wall in front of the lit jamb, black beyond.
+
+use glam::Vec3;
+use pbgi::gather::{Gather, GatherOptions};
+use pbgi::{CutOptions, PointCloud, Surfel, Tree};
+
+/// Surfel spacing: a disk of radius `0.56 H` per cell.
+const H: f32 = 1.0 / 64.0;
+
+/// Surfels on a grid of spacing `H` over the rectangle `origin + a·u + b·v`
+/// (`a` in `[0, w)`, `b` in `[0, l)`), each a disk of its cell's area.
+fn grid(origin: Vec3, u: Vec3, v: Vec3, (w, l): (f32, f32), normal: Vec3, radiance: f32) -> Vec<Surfel> {
+    let (nu, nv) = ((w / H).round() as usize, (l / H).round() as usize);
+    let radius = H / std::f32::consts::PI.sqrt();
+    (0..nu * nv)
+        .map(|k| {
+            let (a, b) = ((k % nu) as f32 + 0.5, (k / nu) as f32 + 0.5);
+            Surfel {
+                position: origin + u * (a * H) + v * (b * H),
+                normal,
+                radiance: Vec3::splat(radiance),
+                radius,
+            }
+        })
+        .collect()
+}
+
+/// The jamb `x = 0` (lit, facing +x, `−0.125 < z < 0`, eight surfels
+/// deep) and the wall `z = 0` in front of it (black, facing +z); `wall:
+/// false` leaves the wall out.
+fn scene(wall: bool) -> Tree {
+    let mut surfels = grid(
+        Vec3::new(0.0, -0.5, -0.125),
+        Vec3::Z,
+        Vec3::Y,
+        (0.125, 1.0),
+        Vec3::X,
+        1.0,
+    );
+    if wall {
+        surfels.extend(grid(
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::X,
+            Vec3::Y,
+            (2.0, 2.0),
+            Vec3::Z,
+            0.0,
+        ));
+    }
+    Tree::build(&PointCloud::new(surfels).unwrap())
+}
+
+#[test]
+fn a_lit_jamb_just_behind_a_dark_wall_stays_hidden_as_the_solid_angle_shrinks() {
+    // Receivers in front of the wall, beside the jamb's plane, facing the
+    // wall. Each cluster straddling the wall and the jamb shows some of the
+    // jamb (its surfels' visibility within it is not modelled), less as Ω
+    // shrinks; leaves show the jamb's first row where its disks poke out of
+    // the wall (by 0.06 H), under 4 % of the jamb's light. Measured, the
+    // worst receiver: 97 / 52 / 20 / 3.5 % at Ω 0.15 / 0.05 / 0.01 /
+    // 0.001. Without the plane test (`samples::wholly_behind`) a fragment of
+    // the jamb drawn on its plane joined the wall's front layer wherever
+    // its depth interval (its placement's spread, up to 3R) reached the
+    // wall's: 100 / 101 / 85 / 40 %, the leaves 16–40 %.
+    let receivers: Vec<(Vec3, Vec3)> = [0.1f32, 0.2, 0.4]
+        .iter()
+        .flat_map(|&x| [0.2f32, 0.5].map(|z| (Vec3::new(x, 0.05, z), -Vec3::Z)))
+        .collect();
+    let (hidden, open) = (scene(true), scene(false));
+    let mut last: Option<Vec<f32>> = None;
+    for (omega, n) in [(0.15, 14), (0.05, 24), (0.01, 32), (0.001, 48), (0.0, 48)] {
+        let opts = GatherOptions {
+            cut: CutOptions {
+                max_solid_angle: omega,
+                ..CutOptions::default()
+            },
+            microbuffer: n,
+            ..GatherOptions::default()
+        };
+        let seen = |tree| Gather::new(tree, &opts).unwrap().irradiance(&receivers).unwrap();
+        let (e, alone) = (seen(&hidden), seen(&open));
+        let shown: Vec<f32> = e.iter().zip(&alone).map(|(e, o)| e.x / o.x).collect();
+        for (s, o) in shown.iter().zip(&alone) {
+            assert!(o.x > 0.01 && s.is_finite(), "Ω {omega}: the jamb alone sends {o}");
+        }
+        if let Some(last) = &last {
+            for ((s, l), r) in shown.iter().zip(last).zip(&receivers) {
+                assert!(
+                    s <= l,
+                    "Ω {omega}, N {n}, at {}: {s} of the jamb shown, {l} at the coarser Ω",
+                    r.0
+                );
+            }
+        }
+        if omega <= 0.001 {
+            for (s, r) in shown.iter().zip(&receivers) {
+                assert!(*s <= 0.04, "Ω {omega}, N {n}, at {}: {s} of the jamb shown", r.0);
+            }
+        }
+        last = Some(shown);
+    }
+}
