@@ -488,7 +488,7 @@ fn one(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
     // this splat's plane there, where the splat itself lies beside it.
     let plane = s.depth(Vec3::new(px.ux[k], px.uy[k], px.uz[k]));
     let slack = s.slack(px.size, true);
-    let (drawn, body) = surface(s);
+    let (own, body) = surface(s);
     Lanes {
         cover: F32s::select(
             M32s::from_bitmask(1 << k),
@@ -498,7 +498,7 @@ fn one(s: &Shape, px: &Pixel, cover: f32) -> Lanes {
         near: F32s::splat(plane.min(s.d) - slack),
         far: F32s::splat(plane.max(s.d) + slack),
         hide: M32s::splat(false),
-        plane: drawn,
+        plane: own,
         body,
     }
 }
