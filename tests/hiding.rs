@@ -31,9 +31,10 @@ fn grid(origin: Vec3, u: Vec3, v: Vec3, (w, l): (f32, f32), normal: Vec3, radian
 }
 
 /// The jamb `x = 0` (lit, facing +x, `−0.125 < z < 0`, eight surfels
-/// deep) and the wall `z = 0` in front of it (black, facing +z); `wall:
-/// false` leaves the wall out.
-fn scene(wall: bool) -> Tree {
+/// deep) and the black wall `z = 0` (facing +z) over `−1 < x < wall`:
+/// `wall = 1.0` covers the jamb, `wall = 0.0` makes the two faces of a
+/// convex corner (a block's top and side), `None` leaves the wall out.
+fn scene(wall: Option<f32>) -> Tree {
     let mut surfels = grid(
         Vec3::new(0.0, -0.5, -0.125),
         Vec3::Z,
@@ -42,17 +43,46 @@ fn scene(wall: bool) -> Tree {
         Vec3::X,
         1.0,
     );
-    if wall {
+    if let Some(x) = wall {
         surfels.extend(grid(
             Vec3::new(-1.0, -1.0, 0.0),
             Vec3::X,
             Vec3::Y,
-            (2.0, 2.0),
+            (1.0 + x, 2.0),
             Vec3::Z,
             0.0,
         ));
     }
     Tree::build(&PointCloud::new(surfels).unwrap())
+}
+
+/// Receivers in front of the wall's plane, beside the jamb's, facing the
+/// wall.
+fn receivers() -> Vec<(Vec3, Vec3)> {
+    [0.1f32, 0.2, 0.4]
+        .iter()
+        .flat_map(|&x| [0.2f32, 0.5].map(|z| (Vec3::new(x, 0.05, z), -Vec3::Z)))
+        .collect()
+}
+
+/// The share of the jamb's light each receiver sees with the wall over
+/// `−1 < x < wall`, at Ω `omega` and microbuffer `n`.
+fn shown(wall: f32, omega: f32, n: usize) -> Vec<f32> {
+    let opts = GatherOptions {
+        cut: CutOptions {
+            max_solid_angle: omega,
+            ..CutOptions::default()
+        },
+        microbuffer: n,
+        ..GatherOptions::default()
+    };
+    let receivers = receivers();
+    let seen = |tree| Gather::new(tree, &opts).unwrap().irradiance(&receivers).unwrap();
+    let (e, alone) = (seen(&scene(Some(wall))), seen(&scene(None)));
+    for (o, r) in alone.iter().zip(&receivers) {
+        assert!(o.x > 0.01, "Ω {omega}: the jamb alone sends {o} at {}", r.0);
+    }
+    e.iter().zip(&alone).map(|(e, o)| e.x / o.x).collect()
 }
 
 #[test]
@@ -62,32 +92,16 @@ fn a_lit_jamb_just_behind_a_dark_wall_stays_hidden_as_the_solid_angle_shrinks() 
     // jamb (its surfels' visibility within it is not modelled), less as Ω
     // shrinks; leaves show the jamb's first row where its disks poke out of
     // the wall (by 0.06 H), under 4 % of the jamb's light. Measured, the
-    // worst receiver: 97 / 52 / 20 / 3.5 % at Ω 0.15 / 0.05 / 0.01 /
+    // worst receiver: 97 / 56 / 20 / 3.5 % at Ω 0.15 / 0.05 / 0.01 /
     // 0.001. Without the plane test (`samples::wholly_behind`) a fragment of
     // the jamb drawn on its plane joined the wall's front layer wherever
     // its depth interval (its placement's spread, up to 3R) reached the
     // wall's: 100 / 101 / 85 / 40 %, the leaves 16–40 %.
-    let receivers: Vec<(Vec3, Vec3)> = [0.1f32, 0.2, 0.4]
-        .iter()
-        .flat_map(|&x| [0.2f32, 0.5].map(|z| (Vec3::new(x, 0.05, z), -Vec3::Z)))
-        .collect();
-    let (hidden, open) = (scene(true), scene(false));
+    let receivers = receivers();
     let mut last: Option<Vec<f32>> = None;
     for (omega, n) in [(0.15, 14), (0.05, 24), (0.01, 32), (0.001, 48), (0.0, 48)] {
-        let opts = GatherOptions {
-            cut: CutOptions {
-                max_solid_angle: omega,
-                ..CutOptions::default()
-            },
-            microbuffer: n,
-            ..GatherOptions::default()
-        };
-        let seen = |tree| Gather::new(tree, &opts).unwrap().irradiance(&receivers).unwrap();
-        let (e, alone) = (seen(&hidden), seen(&open));
-        let shown: Vec<f32> = e.iter().zip(&alone).map(|(e, o)| e.x / o.x).collect();
-        for (s, o) in shown.iter().zip(&alone) {
-            assert!(o.x > 0.01 && s.is_finite(), "Ω {omega}: the jamb alone sends {o}");
-        }
+        let shown = shown(1.0, omega, n);
+        assert!(shown.iter().all(|s| s.is_finite()), "Ω {omega}: {shown:?}");
         if let Some(last) = &last {
             for ((s, l), r) in shown.iter().zip(last).zip(&receivers) {
                 assert!(
@@ -103,5 +117,32 @@ fn a_lit_jamb_just_behind_a_dark_wall_stays_hidden_as_the_solid_angle_shrinks() 
             }
         }
         last = Some(shown);
+    }
+}
+
+#[test]
+fn the_faces_of_a_convex_corner_do_not_hide_each_other() {
+    // The same jamb with the wall ending at its edge: the top and a side of
+    // a block. No point of the top lies between a receiver and the side,
+    // which is wholly seen: the exact share is one. The top's leaves
+    // nearest the edge hide past it (their disks grown to fill the gaps
+    // between a surface's splats), and the side's leaves there lie behind
+    // the top's plane: the plane test kept them out of the front layer and
+    // the grown disks hid them, a band of the side (the Cornell box's
+    // ceiling 2–3 % dark), until a surface wholly behind another's plane
+    // could neither (`samples::hidden_by`, `compose`). Measured, the worst
+    // receiver shows 99.7 % at Ω 0.01, 99.5 % from the leaves (83 % and
+    // 97 % before). Coarser cuts are not asserted: at Ω 0.05 one receiver
+    // sees 88 %, a cluster of the top whose reach takes it in front of the
+    // side's plane (as before).
+    for (omega, n) in [(0.01, 32), (0.001, 48), (0.0, 48)] {
+        let shown = shown(0.0, omega, n);
+        for (s, r) in shown.iter().zip(receivers()) {
+            assert!(
+                (s - 1.0).abs() <= 0.01,
+                "Ω {omega}, N {n}, at {}: {s} of the side shown",
+                r.0
+            );
+        }
     }
 }

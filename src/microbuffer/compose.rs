@@ -10,9 +10,9 @@
 //! the footprint's placement may be off; a cluster that faces several ways
 //! shows each facet's disk on its plane, or, curved, a cone `±R` deep).
 //! At each sub-sample the *front layer* is every fragment
-//! whose interval reaches the nearest fragment's, unless its centre lies
-//! behind the plane of the fragment nearest in depth
-//! (`samples::wholly_behind`): one surface, seen through
+//! whose interval reaches the nearest fragment's, unless a fragment drawn
+//! there hides it: its centre lies behind that one's plane, and not the
+//! other way round (`samples::hidden_by`): one surface, seen through
 //! several splats, whose coverage adds unclamped (the disks of a surface
 //! tile it about once, so a clamp at one would lose the overlaps and keep
 //! the gaps). Everything behind adds through `1 − κ·coverage` of the front
@@ -38,7 +38,7 @@ use std::simd::prelude::*;
 
 use super::fragments::Fragments;
 use super::near::Near;
-use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, lanes, wholly_behind};
+use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, hidden_by, lanes, wholly_behind};
 use super::table::Table;
 use crate::environment::Environment;
 use crate::simd::{F32s, M32s, Real, sum};
@@ -129,13 +129,31 @@ pub(crate) struct Scratch {
     next: Vec<u32>,
     /// The fragments bucketed by pixel.
     sorted: Vec<Sorted>,
-    /// One pixel's fragments at its sub-samples: coverage, near depth,
-    /// what it hides, its index and its body (`Lanes`).
-    seen: Vec<(F32s, F32s, M32s, u32, [F32s; 4])>,
+    /// One pixel's fragments at its sub-samples.
+    seen: Vec<Seen>,
+    /// Per fragment of `seen`: where it hides what lies behind the front
+    /// layer.
+    hides: Vec<M32s>,
+    /// The fragments behind the front layer that the fragment nearest in
+    /// depth cannot hide: their coverage there, and where they are in
+    /// `seen`.
+    backs: Vec<(F32s, u32)>,
     /// The composed pixels: per pixel the effective coverage and the
     /// radiance it lets through (empty when only coverage was asked for).
     pub cover: Vec<f32>,
     pub radiance: Vec<Vec3>,
+}
+
+/// A fragment at a pixel's sub-samples: its `Lanes` less the far depth,
+/// and its index.
+#[derive(Clone, Copy, Debug)]
+struct Seen {
+    cover: F32s,
+    near: F32s,
+    hide: M32s,
+    index: u32,
+    plane: [F32s; 4],
+    body: [F32s; 4],
 }
 
 /// The lanes' mean, as a fraction of the pixel (`simd::sum`: summed one
@@ -169,6 +187,8 @@ pub(crate) fn compose(
         next,
         sorted,
         seen,
+        hides,
+        backs,
         cover: out_cover,
         radiance: out_radiance,
     } = s;
@@ -256,12 +276,13 @@ pub(crate) fn compose(
             size: t.pixel_size[p] * 0.25,
         };
         // At each sub-sample: the far depth of the fragment whose interval
-        // starts nearest, and the plane of the one whose depth is nearest
-        // (a surface seen at a grazing angle has a wide interval, whose
-        // start may come before the facing surface in front of it).
+        // starts nearest, and the plane and body of the one whose depth is
+        // nearest (a surface seen at a grazing angle has a wide interval,
+        // whose start may come before the facing surface in front of it).
         seen.clear();
         let (mut nearest, mut reach) = (F32s::splat(f32::INFINITY), F32s::splat(f32::INFINITY));
         let mut plane = [zero, zero, zero, F32s::splat(f32::NEG_INFINITY)];
+        let mut body = [zero; 4];
         let mut depth = F32s::splat(f32::INFINITY);
         for &(_, i) in bucket.iter() {
             let k = shape_of[i as usize] as usize;
@@ -279,42 +300,89 @@ pub(crate) fn compose(
             depth = F32s::select(closer, mid, depth);
             for c in 0..4 {
                 plane[c] = F32s::select(closer, l.plane[c], plane[c]);
+                body[c] = F32s::select(closer, l.body[c], body[c]);
             }
-            seen.push((l.cover, l.near, l.hide, i, l.body));
+            seen.push(Seen {
+                cover: l.cover,
+                near: l.near,
+                hide: l.hide,
+                index: i,
+                plane: l.plane,
+                body: l.body,
+            });
         }
-        // The front layer (what reaches that far depth and is not wholly
-        // behind that plane), what it hides outright, and what lies behind
-        // it.
+        // The front layer (what reaches that far depth and is not hidden),
+        // what it hides outright, and what lies behind it. Hidden: by the
+        // fragment nearest in depth; where that one is spared (two faces of
+        // a convex corner, each behind the other's plane: rare, so the
+        // search is), by any other fragment drawn there.
         let (mut front, mut behind) = (zero, zero);
         let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
         let mut hidden = M32s::splat(false);
-        for &(cover, near, hide, i, body) in seen.iter() {
-            let in_front = near.simd_le(reach) & !wholly_behind(&plane, &body);
-            hidden |= hide & in_front;
-            let a = F32s::select(in_front, cover, zero);
-            let b = cover - a;
+        hides.clear();
+        backs.clear();
+        for (k, e) in seen.iter().enumerate() {
+            let (own, at) = (&e.plane, &e.body);
+            // Where the fragment nearest in depth lies wholly behind this
+            // one's plane (it can hide none of it).
+            let beside = wholly_behind(own, &body);
+            let back = wholly_behind(&plane, at);
+            let spared = back & beside;
+            let mut hid = back & !spared;
+            if spared.any() {
+                for f in seen.iter() {
+                    hid |= spared & (zero.simd_lt(f.cover) | f.hide) & hidden_by(&f.plane, &f.body, own, at);
+                }
+            }
+            let in_front = e.near.simd_le(reach) & !hid;
+            let h = e.hide & in_front;
+            hidden |= h;
+            hides.push(h);
+            let a = F32s::select(in_front, e.cover, zero);
+            let b = e.cover - a;
             front += a;
-            behind += b;
+            let odd = (b.simd_ne(zero) & beside).any();
+            if odd {
+                backs.push((b, k as u32));
+            } else {
+                behind += b;
+            }
             if radiance {
-                let r = frags.radiance[i as usize];
+                let r = frags.radiance[e.index as usize];
                 for c in 0..3 {
                     lf[c] += a * F32s::splat(r[c]);
-                    lb[c] += b * F32s::splat(r[c]);
+                    if !odd {
+                        lb[c] += b * F32s::splat(r[c]);
+                    }
                 }
             }
         }
-        let through = F32s::select(
-            hidden,
-            zero,
-            (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero),
-        );
-        out_cover[p] = mean(front + through * behind);
+        let open = (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero);
+        let through = F32s::select(hidden, zero, open);
+        let mut cover = front + through * behind;
+        let mut light = [0, 1, 2].map(|c| lf[c] + through * lb[c]);
+        // What lies behind where the fragment nearest in depth lies wholly
+        // behind its plane: hidden only where a front splat that can hide
+        // it does (a block's top, whose grown disks reach past its edge,
+        // cannot hide its side).
+        for &(b, k) in backs.iter() {
+            let e = &seen[k as usize];
+            let mut hid = M32s::splat(false);
+            for (h, f) in hides.iter().zip(seen.iter()) {
+                hid |= *h & !wholly_behind(&e.plane, &f.body);
+            }
+            let t = F32s::select(hid, zero, open) * b;
+            cover += t;
+            if radiance {
+                let r = frags.radiance[e.index as usize];
+                for c in 0..3 {
+                    light[c] += t * F32s::splat(r[c]);
+                }
+            }
+        }
+        out_cover[p] = mean(cover);
         if radiance {
-            out_radiance[p] = Vec3::new(
-                mean(lf[0] + through * lb[0]),
-                mean(lf[1] + through * lb[1]),
-                mean(lf[2] + through * lb[2]),
-            );
+            out_radiance[p] = Vec3::new(mean(light[0]), mean(light[1]), mean(light[2]));
         }
     }
     brightest

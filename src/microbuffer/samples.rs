@@ -334,19 +334,35 @@ fn surface(s: &Shape) -> ([F32s; 4], [F32s; 4]) {
     (plane, [sp(s.v.x), sp(s.v.y), sp(s.v.z), sp(tol)])
 }
 
-/// Where a fragment whose surface is `body` lies wholly behind `plane`,
-/// that of the fragment nearest in depth (per sub-sample): its centre
-/// further behind that plane than its tolerance. Such a fragment joins no
-/// front layer, however near its depth interval reaches: the interval's
-/// placement spread (up to `3R`) joined a window's sunlit jambs to the
-/// wall a few centimetres in front of them, and the nave's floor saw them
-/// as if nothing hid them (`tests/hiding.rs`). A disk overhanging a convex
-/// corner, whose centre lies in front of the other wall, still joins that
-/// wall's front layer (the closed-form rooms keep their bits).
+/// Where a surface whose centre and tolerance are `body` lies wholly
+/// behind `plane`: its centre further behind that plane than its tolerance.
 #[inline(always)]
 pub(crate) fn wholly_behind(plane: &[F32s; 4], body: &[F32s; 4]) -> M32s {
     let side = plane[0] * body[0] + plane[1] * body[1] + plane[2] * body[2] - plane[3];
     side.simd_lt(-body[3])
+}
+
+/// Where the fragment `(plane, body)` is hidden by `(near_plane,
+/// near_body)`, another drawn at the same sub-sample: it lies wholly behind
+/// that one's plane, and that one does not lie wholly behind its. Such a
+/// fragment joins no front layer, however near its depth interval reaches:
+/// the interval's placement spread (up to `3R`) joined a window's sunlit
+/// jambs to the wall a few centimetres in front of them, and the nave's
+/// floor saw them as if nothing hid them (`tests/hiding.rs`). Two faces of
+/// a convex corner each lie behind the other's plane, and neither can hide
+/// the other: a block's top, whose grown hiding disk reaches past its edge,
+/// hid a band of its side (the Cornell box's ceiling 2–3 % dark). A disk
+/// overhanging a convex corner, whose centre lies in front of the other
+/// wall, still joins that wall's front layer (the closed-form rooms keep
+/// their bits).
+#[inline(always)]
+pub(crate) fn hidden_by(
+    near_plane: &[F32s; 4],
+    near_body: &[F32s; 4],
+    plane: &[F32s; 4],
+    body: &[F32s; 4],
+) -> M32s {
+    wholly_behind(near_plane, body) & !wholly_behind(plane, near_body)
 }
 
 /// Fragment of coverage `cover` of shape `s` at the sub-samples of `px`.
