@@ -131,9 +131,6 @@ pub(crate) struct Scratch {
     sorted: Vec<Sorted>,
     /// One pixel's fragments at its sub-samples.
     seen: Vec<Seen>,
-    /// Per fragment of `seen`: where it hides what lies behind the front
-    /// layer.
-    hides: Vec<M32s>,
     /// The fragments behind the front layer that the fragment nearest in
     /// depth cannot hide: their coverage there, and where they are in
     /// `seen`.
@@ -144,16 +141,33 @@ pub(crate) struct Scratch {
     pub radiance: Vec<Vec3>,
 }
 
-/// A fragment at a pixel's sub-samples: its `Lanes` less the far depth,
-/// and its index.
+/// A fragment at a pixel's sub-samples: its `Lanes` less the far depth
+/// (the masks as bits: a pixel's fragments are copied once and read twice,
+/// and their size is the composition's memory traffic), and its index.
 #[derive(Clone, Copy, Debug)]
 struct Seen {
     cover: F32s,
     near: F32s,
-    hide: M32s,
-    index: u32,
     plane: [F32s; 4],
     body: [F32s; 4],
+    index: u32,
+    /// Where it is drawn (covers or hides), where it hides, and where it
+    /// hides what lies behind the front layer (once that is known).
+    drawn: u16,
+    hide: u16,
+    hides: u16,
+}
+
+/// A mask from its bits.
+#[inline(always)]
+fn mask(bits: u16) -> M32s {
+    M32s::from_bitmask(u64::from(bits))
+}
+
+/// A mask's bits.
+#[inline(always)]
+fn bits(m: M32s) -> u16 {
+    m.to_bitmask() as u16
 }
 
 /// The lanes' mean, as a fraction of the pixel (`simd::sum`: summed one
@@ -187,7 +201,6 @@ pub(crate) fn compose(
         next,
         sorted,
         seen,
-        hides,
         backs,
         cover: out_cover,
         radiance: out_radiance,
@@ -305,10 +318,12 @@ pub(crate) fn compose(
             seen.push(Seen {
                 cover: l.cover,
                 near: l.near,
-                hide: l.hide,
-                index: i,
                 plane: l.plane,
                 body: l.body,
+                index: i,
+                drawn: bits(drawn),
+                hide: bits(l.hide),
+                hides: 0,
             });
         }
         // The front layer (what reaches that far depth and is not hidden),
@@ -319,9 +334,9 @@ pub(crate) fn compose(
         let (mut front, mut behind) = (zero, zero);
         let (mut lf, mut lb) = ([zero; 3], [zero; 3]);
         let mut hidden = M32s::splat(false);
-        hides.clear();
         backs.clear();
-        for (k, e) in seen.iter().enumerate() {
+        for k in 0..seen.len() {
+            let e = &seen[k];
             let (own, at) = (&e.plane, &e.body);
             // Where the fragment nearest in depth lies wholly behind this
             // one's plane (it can hide none of it).
@@ -331,13 +346,12 @@ pub(crate) fn compose(
             let mut hid = back & !spared;
             if spared.any() {
                 for f in seen.iter() {
-                    hid |= spared & (zero.simd_lt(f.cover) | f.hide) & hidden_by(&f.plane, &f.body, own, at);
+                    hid |= spared & mask(f.drawn) & hidden_by(&f.plane, &f.body, own, at);
                 }
             }
             let in_front = e.near.simd_le(reach) & !hid;
-            let h = e.hide & in_front;
+            let h = mask(e.hide) & in_front;
             hidden |= h;
-            hides.push(h);
             let a = F32s::select(in_front, e.cover, zero);
             let b = e.cover - a;
             front += a;
@@ -356,6 +370,7 @@ pub(crate) fn compose(
                     }
                 }
             }
+            seen[k].hides = bits(h);
         }
         let open = (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero);
         let through = F32s::select(hidden, zero, open);
@@ -368,8 +383,8 @@ pub(crate) fn compose(
         for &(b, k) in backs.iter() {
             let e = &seen[k as usize];
             let mut hid = M32s::splat(false);
-            for (h, f) in hides.iter().zip(seen.iter()) {
-                hid |= *h & !wholly_behind(&e.plane, &f.body);
+            for f in seen.iter() {
+                hid |= mask(f.hides) & !wholly_behind(&e.plane, &f.body);
             }
             let t = F32s::select(hid, zero, open) * b;
             cover += t;
