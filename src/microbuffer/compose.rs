@@ -142,21 +142,18 @@ pub(crate) struct Scratch {
 }
 
 /// A fragment at a pixel's sub-samples: its `Lanes` less the far depth
-/// (the masks as bits: a pixel's fragments are copied once and read twice,
-/// and their size is the composition's memory traffic), and its index.
-#[derive(Clone, Copy, Debug)]
-struct Seen {
-    cover: F32s,
-    near: F32s,
-    plane: [F32s; 4],
-    body: [F32s; 4],
-    index: u32,
-    /// Where it is drawn (covers or hides), where it hides, and where it
-    /// hides what lies behind the front layer (once that is known).
-    drawn: u16,
-    hide: u16,
-    hides: u16,
-}
+/// (coverage, near depth, plane, body), its index, and three masks as bits
+/// (a pixel's fragments are copied once and read twice): where it is drawn
+/// (covers or hides), where it hides, and where it hides what lies behind
+/// the front layer (once that is known). A tuple of `std` types: a vector
+/// of a type of ours would grow through a function named after it, out of
+/// line, which `scripts/check-asm.sh` rightly cannot tell from kernel code.
+type Seen = (F32s, F32s, [F32s; 4], [F32s; 4], u32, [u16; 3]);
+
+/// [`Seen`]'s masks: drawn, hides, hides behind the front layer.
+const DRAWN: usize = 0;
+const HIDE: usize = 1;
+const HIDES: usize = 2;
 
 /// A mask from its bits.
 #[inline(always)]
@@ -315,16 +312,14 @@ pub(crate) fn compose(
                 plane[c] = F32s::select(closer, l.plane[c], plane[c]);
                 body[c] = F32s::select(closer, l.body[c], body[c]);
             }
-            seen.push(Seen {
-                cover: l.cover,
-                near: l.near,
-                plane: l.plane,
-                body: l.body,
-                index: i,
-                drawn: bits(drawn),
-                hide: bits(l.hide),
-                hides: 0,
-            });
+            seen.push((
+                l.cover,
+                l.near,
+                l.plane,
+                l.body,
+                i,
+                [bits(drawn), bits(l.hide), 0],
+            ));
         }
         // The front layer (what reaches that far depth and is not hidden),
         // what it hides outright, and what lies behind it. Hidden: by the
@@ -337,7 +332,7 @@ pub(crate) fn compose(
         backs.clear();
         for k in 0..seen.len() {
             let e = &seen[k];
-            let (own, at) = (&e.plane, &e.body);
+            let (own, at) = (&e.2, &e.3);
             // Where the fragment nearest in depth lies wholly behind this
             // one's plane (it can hide none of it).
             let beside = wholly_behind(own, &body);
@@ -346,14 +341,14 @@ pub(crate) fn compose(
             let mut hid = back & !spared;
             if spared.any() {
                 for f in seen.iter() {
-                    hid |= spared & mask(f.drawn) & hidden_by(&f.plane, &f.body, own, at);
+                    hid |= spared & mask(f.5[DRAWN]) & hidden_by(&f.2, &f.3, own, at);
                 }
             }
-            let in_front = e.near.simd_le(reach) & !hid;
-            let h = mask(e.hide) & in_front;
+            let in_front = e.1.simd_le(reach) & !hid;
+            let h = mask(e.5[HIDE]) & in_front;
             hidden |= h;
-            let a = F32s::select(in_front, e.cover, zero);
-            let b = e.cover - a;
+            let a = F32s::select(in_front, e.0, zero);
+            let b = e.0 - a;
             front += a;
             let odd = (b.simd_ne(zero) & beside).any();
             if odd {
@@ -362,7 +357,7 @@ pub(crate) fn compose(
                 behind += b;
             }
             if radiance {
-                let r = frags.radiance[e.index as usize];
+                let r = frags.radiance[e.4 as usize];
                 for c in 0..3 {
                     lf[c] += a * F32s::splat(r[c]);
                     if !odd {
@@ -370,12 +365,16 @@ pub(crate) fn compose(
                     }
                 }
             }
-            seen[k].hides = bits(h);
+            seen[k].5[HIDES] = bits(h);
         }
         let open = (F32s::splat(1.0) - F32s::splat(KAPPA) * front).simd_max(zero);
         let through = F32s::select(hidden, zero, open);
         let mut cover = front + through * behind;
-        let mut light = [0, 1, 2].map(|c| lf[c] + through * lb[c]);
+        let mut light = [
+            lf[0] + through * lb[0],
+            lf[1] + through * lb[1],
+            lf[2] + through * lb[2],
+        ];
         // What lies behind where the fragment nearest in depth lies wholly
         // behind its plane: hidden only where a front splat that can hide
         // it does (a block's top, whose grown disks reach past its edge,
@@ -384,12 +383,12 @@ pub(crate) fn compose(
             let e = &seen[k as usize];
             let mut hid = M32s::splat(false);
             for f in seen.iter() {
-                hid |= mask(f.hides) & !wholly_behind(&e.plane, &f.body);
+                hid |= mask(f.5[HIDES]) & !wholly_behind(&e.2, &f.3);
             }
             let t = F32s::select(hid, zero, open) * b;
             cover += t;
             if radiance {
-                let r = frags.radiance[e.index as usize];
+                let r = frags.radiance[e.4 as usize];
                 for c in 0..3 {
                     light[c] += t * F32s::splat(r[c]);
                 }
