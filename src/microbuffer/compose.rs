@@ -338,7 +338,7 @@ pub(crate) fn compose(
             let beside = wholly_behind(own, &body);
             let back = wholly_behind(&plane, at);
             let spared = back & beside;
-            let mut hid = back & !spared;
+            let mut hid = back & !beside;
             if spared.any() {
                 for f in seen.iter() {
                     hid |= spared & mask(f.5[DRAWN]) & hidden_by(&f.2, &f.3, own, at);
