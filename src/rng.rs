@@ -69,9 +69,35 @@ pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
     (unit(x ^ scramble[0]), unit(y ^ scramble[1]))
 }
 
+/// The strata of `n` camera samples over a pixel: `(columns, rows)` with
+/// `columns × rows = n`, rows the largest divisor of `n` not above √n, so
+/// every stratum holds one sample (a √n grid rounded up left the last row
+/// short: at 2 spp both samples fell in the pixel's top half, at 32 the
+/// bottom sixth got a third of its share).
+pub(crate) fn strata(n: u32) -> (u32, u32) {
+    let n = n.max(1);
+    let rows = (1..=n.isqrt()).rev().find(|r| n % r == 0).unwrap_or(1);
+    (n / rows, rows)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::sobol2;
+    use super::{sobol2, strata};
+
+    /// Every sample count tiles the pixel exactly, square where it can.
+    #[test]
+    fn strata_tile_the_pixel() {
+        assert_eq!(strata(1), (1, 1));
+        assert_eq!(strata(2), (2, 1));
+        assert_eq!(strata(16), (4, 4));
+        assert_eq!(strata(32), (8, 4));
+        assert_eq!(strata(7), (7, 1));
+        for n in 1..300 {
+            let (c, r) = strata(n);
+            assert_eq!(c * r, n);
+            assert!(r <= c);
+        }
+    }
 
     /// Each block of 16 points puts one point in each of the 4×4 cells, and
     /// in each 16×1 and 1×16 strip (the elementary intervals of a (0,4,2)-net).
