@@ -76,7 +76,7 @@ pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
 /// bottom sixth got a third of its share).
 pub(crate) fn strata(n: u32) -> (u32, u32) {
     let n = n.max(1);
-    let rows = (1..=n.isqrt()).rev().find(|r| n % r == 0).unwrap_or(1);
+    let rows = (1..=n.isqrt()).rev().find(|&r| n.is_multiple_of(r)).unwrap_or(1);
     (n / rows, rows)
 }
 

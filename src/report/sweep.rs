@@ -8,7 +8,9 @@ use super::compare::{compare, emitter_mask};
 use super::error::ReportError;
 use super::eta::Eta;
 use crate::cut::{CutOptions, SchemeChoice};
-use crate::render::{Gathers, Image, ReferenceOptions, RenderOptions, render, render_reference};
+use crate::render::{
+    DEFAULT_LIGHT_SAMPLES, Gathers, Image, ReferenceOptions, RenderOptions, render, render_reference,
+};
 use crate::scene::Scene;
 
 /// Which renderer made an image.
@@ -128,13 +130,16 @@ fn gathers_text(g: Gathers) -> String {
 
 /// The settings the curves vary, in words, for the report's header.
 pub fn describe(o: &RenderOptions) -> String {
+    let light = match o.direct_samples {
+        Some(d) => format!("{d} light samples"),
+        None => format!("{DEFAULT_LIGHT_SAMPLES} light samples a pixel (4 to 16 a camera sample)"),
+    };
     format!(
-        "Ω {}, N {}, {}, scheme {}, {} light samples, {} bounce(s)",
+        "Ω {}, N {}, {}, scheme {}, {light}, {} bounce(s)",
         o.cut.max_solid_angle,
         o.microbuffer,
         gathers_text(o.gathers),
         o.scheme,
-        o.light_samples(),
         o.bounces
     )
 }
