@@ -279,13 +279,15 @@ fn a_small_sweep_measures_every_curve() {
     })
     .unwrap();
     let last = last.into_inner().unwrap().unwrap();
-    assert_eq!((last.done, last.images, last.remaining_s), (11, 11, Some(0.0)));
+    assert_eq!((last.done, last.images, last.remaining_s), (13, 13, Some(0.0)));
     let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
     assert_eq!(
         order,
         [
             ("defaults", 1),
             ("defaults", 4),
+            ("defaults", 8),
+            ("defaults", 16),
             (small.as_str(), 4),
             ("dense gathers", 1),
             ("dense gathers", 4),

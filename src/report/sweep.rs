@@ -158,17 +158,23 @@ const SMALL_OMEGA_MIN_SPP: u32 = 4;
 /// loses by it (BENCHMARKS.md, "The fast side of the curve").
 const COARSE: (f32, usize) = (0.5, 8);
 
-/// The default curves: `base` (what `pbgi render` uses) at every `spp`, Ω
-/// 0.4× the base's at the higher ones, dense gathers at the lower ones, and
-/// the coarse gather [`COARSE`] at every `spp` and 2× and 4× the last,
-/// where the base is finer.
+/// The default curves: `base` (what `pbgi render` uses) at every `spp` and
+/// 2× and 4× the last, Ω 0.4× the base's at the higher ones, dense gathers
+/// at the lower ones, and the coarse gather [`COARSE`] at the base's, where
+/// the base is finer. The base's extra points cost little: past 16 spp a
+/// camera sample takes fewer light samples
+/// ([`RenderOptions::light_samples`]).
 /// Curves equal to an earlier one, or left without points, are dropped.
 pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
     // Rounded to 4 decimals, so the curve's label reads `Ω 0.06`, not
     // `Ω 0.060000002`.
     let small_omega = ((f64::from(base.cut.max_solid_angle) * 0.4 * 1e4).round() / 1e4) as f32;
+    // Two more points, 2× and 4× the last: where a curve's error stops
+    // falling (its floor) is measured, not only fitted.
+    let last = spp.iter().copied().max().unwrap_or(1);
+    let extended: Vec<u32> = spp.iter().copied().chain([2 * last, 4 * last]).collect();
     let variants = [
-        (Variant::default(), spp.to_vec()),
+        (Variant::default(), extended.clone()),
         (
             Variant {
                 max_solid_angle: Some(small_omega),
@@ -193,12 +199,7 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
                 ..Variant::default()
             },
             if base.cut.max_solid_angle < COARSE.0 && base.microbuffer > COARSE.1 {
-                // Cheap enough to measure two more points, 2× and 4× the
-                // last: where its error stops falling (its floor) is
-                // measured, not only fitted.
-                let last = spp.iter().copied().max().unwrap_or(1);
-                let more = [2 * last, 4 * last];
-                spp.iter().copied().chain(more).collect()
+                extended
             } else {
                 Vec::new()
             },
