@@ -345,8 +345,8 @@ fn small_scene(dir: &Path) -> PathBuf {
 
 /// `pbgi report` end to end on a small scene: it path traces the missing
 /// reference, sweeps, prints the equal-error table and writes the four
-/// files; `--replot` redraws from the CSV; a reference of another size is
-/// refused with both sizes named.
+/// files; `--replot` redraws from the CSV; two references are averaged; a
+/// reference of another size is refused with both sizes named.
 #[cfg(feature = "cli")]
 #[test]
 fn the_cli_report_runs_end_to_end() {
@@ -391,7 +391,29 @@ fn the_cli_report_runs_end_to_end() {
     assert!(ok && text.contains("| 2 % |"), "{text}");
     assert!(out_dir.join("error.png").is_file());
 
+    // Two references are averaged, and the table says so with their noise:
+    // the same image twice has none.
     let reference = out_dir.join("reference.exr");
+    let r = reference.to_str().unwrap();
+    let (ok, text) = run(&[
+        scene_s,
+        "--reference",
+        r,
+        "--reference",
+        r,
+        "--out",
+        out_s,
+        "--spp",
+        "1",
+        "--path-tracer-spp",
+        "4",
+    ]);
+    assert!(ok, "{text}");
+    let md = std::fs::read_to_string(out_dir.join("error.md")).unwrap();
+    assert!(
+        md.contains("the mean of") && md.contains("its own noise about 0.00 %"),
+        "{md}"
+    );
     let (ok, text) = run(&[
         "cornell-box",
         "--reference",

@@ -64,8 +64,10 @@ pub struct ReportArgs {
     #[arg(default_value = "cornell-box")]
     pub scene: String,
     /// The ground truth (.exr); default: OUT/reference.exr, path traced first if missing.
+    /// Several (`pbgi reference` with other `--seed`s) are averaged: a
+    /// reference's own noise is in every curve's error.
     #[arg(long)]
-    pub reference: Option<PathBuf>,
+    pub reference: Vec<PathBuf>,
     /// Paths per pixel of the reference when it is path traced here.
     #[arg(long, default_value_t = 4096)]
     pub reference_spp: u32,

@@ -7,7 +7,7 @@ use pbgi::render::{ReferenceOptions, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{
     DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, Grid, SweepOptions, SweepProgress, check_reference, default_curves,
-    describe, equal_error_markdown, error_sweep, from_csv, to_csv, to_markdown,
+    describe, emitter_mask, equal_error_markdown, error_sweep, from_csv, mean_reference, to_csv, to_markdown,
 };
 
 use crate::args::{ReportArgs, Res, parse_choices, parse_gathers};
@@ -101,44 +101,64 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     let scene = load_scene(&a.scene)?;
     let pool = thread_pool(a.threads)?;
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
-    let (ref_path, given) = match &a.reference {
-        Some(p) => (p.clone(), true),
-        None => (a.out.join("reference.exr"), false),
-    };
     let reference_note;
-    let reference = if ref_path.exists() {
-        println!("reference: {}", ref_path.display());
-        reference_note = format!("Reference: `{}`.", ref_path.display());
-        read_exr(&ref_path)?
-    } else if given {
-        return Err(format!("{}: no such reference image", ref_path.display()).into());
-    } else {
-        let bar = progress_bar(
-            "rows",
-            format!("path tracing the reference, {} spp", a.reference_spp),
-        );
-        let opts = ReferenceOptions {
-            spp: a.reference_spp,
-            bounces: sweep.bounces as i32,
-            ..Default::default()
+    let reference = if !a.reference.is_empty() {
+        let mut images = Vec::new();
+        for path in &a.reference {
+            if !path.exists() {
+                return Err(format!("{}: no such reference image", path.display()).into());
+            }
+            println!("reference: {}", path.display());
+            let image = read_exr(path)?;
+            check_reference(&scene, &image).map_err(|e| format!("{}: {e}", path.display()))?;
+            images.push(image);
+        }
+        let names: Vec<String> = a.reference.iter().map(|p| format!("`{}`", p.display())).collect();
+        let (mean, noise) = mean_reference(&images, &emitter_mask(&scene))?;
+        reference_note = match noise {
+            Some(noise) => format!(
+                "Reference: the mean of {} (its own noise about {:.2} % relative RMSE).",
+                names.join(", "),
+                100.0 * noise
+            ),
+            None => format!("Reference: {}.", names[0]),
         };
-        let out = pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
-        bar.finish_and_clear();
-        write_image(&out.image, &ref_path)?;
-        println!(
-            "reference: path traced at {} spp in {:.1} s, wrote {}",
-            a.reference_spp,
-            out.seconds,
-            ref_path.display()
-        );
-        reference_note = format!(
-            "Reference: the path tracer at {} spp (`{}`).",
-            a.reference_spp,
-            ref_path.display()
-        );
-        out.image
+        mean
+    } else {
+        let ref_path = a.out.join("reference.exr");
+        if ref_path.exists() {
+            println!("reference: {}", ref_path.display());
+            reference_note = format!("Reference: `{}`.", ref_path.display());
+            read_exr(&ref_path)?
+        } else {
+            let bar = progress_bar(
+                "rows",
+                format!("path tracing the reference, {} spp", a.reference_spp),
+            );
+            let opts = ReferenceOptions {
+                spp: a.reference_spp,
+                bounces: sweep.bounces as i32,
+                ..Default::default()
+            };
+            let out =
+                pool.install(|| render_reference(&scene, &opts, &|done, total| tick(&bar, done, total)))?;
+            bar.finish_and_clear();
+            write_image(&out.image, &ref_path)?;
+            println!(
+                "reference: path traced at {} spp in {:.1} s, wrote {}",
+                a.reference_spp,
+                out.seconds,
+                ref_path.display()
+            );
+            reference_note = format!(
+                "Reference: the path tracer at {} spp (`{}`).",
+                a.reference_spp,
+                ref_path.display()
+            );
+            out.image
+        }
     };
-    check_reference(&scene, &reference).map_err(|e| format!("{}: {e}", ref_path.display()))?;
+    check_reference(&scene, &reference).map_err(|e| format!("the reference: {e}"))?;
     for c in &sweep.curves {
         println!("point-based curve \"{}\": {} spp", c.label, list(&c.spp));
     }
