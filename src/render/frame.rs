@@ -331,17 +331,19 @@ impl<'s> Frame<'s> {
                 let lobe = m.lobe();
                 let fd = m.albedo * std::f32::consts::FRAC_1_PI;
                 let (n, wo) = (sp.normal, sp.wo);
-                let glossy = |wi: Vec3| lobe.as_ref().map_or(Vec3::ZERO, |l| l.eval(n, wo, wi));
+                let f = |wi: Vec3| match &lobe {
+                    Some(l) => fd + l.eval(n, wo, wi),
+                    None => fd,
+                };
                 sp.emitted
-                    + self.lights.reflected_at_receiver(
+                    + self.lights.reflected(
                         &self.tracer,
                         sp.position,
                         n,
                         self.light_samples(),
                         pp.light_first,
                         pp.light_scramble,
-                        fd,
-                        glossy,
+                        f,
                     )
             })
             .collect()

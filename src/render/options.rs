@@ -103,10 +103,8 @@ impl std::fmt::Display for Gathers {
     }
 }
 
-/// Area-light samples a pixel gets over its camera samples when
-/// `RenderOptions::direct_samples` is `None`, at least 4 and at most 16 at
-/// each ([`RenderOptions::light_samples`]).
-pub const DEFAULT_LIGHT_SAMPLES: u32 = 256;
+/// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 
 /// Render settings; the defaults render the Cornell box in about a second.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -144,8 +142,7 @@ pub struct RenderOptions {
     /// of pixels (the default) or at every camera sample.
     pub gathers: Gathers,
     /// Area-light samples at each camera sample's receiver (`None`:
-    /// [`DEFAULT_LIGHT_SAMPLES`] over the pixel's camera samples, 4 to 16
-    /// at each), independent of the camera samples: direct
+    /// [`DEFAULT_LIGHT_SAMPLES`]), independent of the camera samples: direct
     /// light costs a few shadow rays where a gather costs a microbuffer, so
     /// its noise is cheap to take out.
     pub direct_samples: Option<u32>,
@@ -328,17 +325,9 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
-    /// Area-light samples at each receiver: by default 16 up to 16 spp,
-    /// then fewer as the camera samples rise, at least 4. A pixel's light
-    /// samples are one stratified sequence over its camera samples, and
-    /// with the near lights in closed form (`Lights::reflected_at_receiver`)
-    /// more camera samples with fewer light samples each buy more than the
-    /// converse. The nave, error² less the floor times seconds, one run
-    /// each: at 64 spp 44 / 43 for 4 / 8 light samples, at 128 spp 46 / 38
-    /// for 2 / 4; at 16 spp 121 / 115 / 108 for 4 / 8 / 16.
+    /// Area-light samples at each receiver.
     pub fn light_samples(&self) -> u32 {
-        self.direct_samples
-            .unwrap_or((DEFAULT_LIGHT_SAMPLES / self.spp.max(1)).clamp(4, 16))
+        self.direct_samples.unwrap_or(DEFAULT_LIGHT_SAMPLES)
     }
 
     /// Surfels per unit area for `scene`: `density`, or the budget over the

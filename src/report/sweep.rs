@@ -8,9 +8,7 @@ use super::compare::{compare, emitter_mask};
 use super::error::ReportError;
 use super::eta::Eta;
 use crate::cut::{CutOptions, SchemeChoice};
-use crate::render::{
-    DEFAULT_LIGHT_SAMPLES, Gathers, Image, ReferenceOptions, RenderOptions, render, render_reference,
-};
+use crate::render::{Gathers, Image, ReferenceOptions, RenderOptions, render, render_reference};
 use crate::scene::Scene;
 
 /// Which renderer made an image.
@@ -130,16 +128,13 @@ fn gathers_text(g: Gathers) -> String {
 
 /// The settings the curves vary, in words, for the report's header.
 pub fn describe(o: &RenderOptions) -> String {
-    let light = match o.direct_samples {
-        Some(d) => format!("{d} light samples"),
-        None => format!("{DEFAULT_LIGHT_SAMPLES} light samples a pixel (4 to 16 a camera sample)"),
-    };
     format!(
-        "Ω {}, N {}, {}, scheme {}, {light}, {} bounce(s)",
+        "Ω {}, N {}, {}, scheme {}, {} light samples, {} bounce(s)",
         o.cut.max_solid_angle,
         o.microbuffer,
         gathers_text(o.gathers),
         o.scheme,
+        o.light_samples(),
         o.bounces
     )
 }
@@ -161,9 +156,7 @@ const COARSE: (f32, usize) = (0.5, 8);
 /// The default curves: `base` (what `pbgi render` uses) at every `spp` and
 /// 2× and 4× the last, Ω 0.4× the base's at the higher ones, dense gathers
 /// at the lower ones, and the coarse gather [`COARSE`] at the base's, where
-/// the base is finer. The base's extra points cost little: past 16 spp a
-/// camera sample takes fewer light samples
-/// ([`RenderOptions::light_samples`]).
+/// the base is finer.
 /// Curves equal to an earlier one, or left without points, are dropped.
 pub fn default_curves(base: &RenderOptions, spp: &[u32]) -> Vec<Curve> {
     // Rounded to 4 decimals, so the curve's label reads `Ω 0.06`, not
