@@ -80,6 +80,16 @@ pub(crate) fn strata(n: u32) -> (u32, u32) {
     (n / rows, rows)
 }
 
+/// Camera sample `s` of `spp` in pixel `(x, y)`: a point jittered by `rng`
+/// within its stratum ([`strata`]), on the film. The renderer and the path
+/// tracer sample pixels alike.
+pub(crate) fn film_point(x: u32, y: u32, s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
+    let (across, down) = strata(spp);
+    let fx = x as f32 + ((s % across) as f32 + rng.f32()) / across as f32;
+    let fy = y as f32 + ((s / across) as f32 + rng.f32()) / down as f32;
+    (fx, fy)
+}
+
 #[cfg(test)]
 mod tests {
     use super::{sobol2, strata};

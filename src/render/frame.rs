@@ -26,7 +26,7 @@ use crate::environment::Environment;
 use crate::error::Error;
 use crate::gather::{Gather, Gatherer};
 use crate::microbuffer::{Convolution, MicroBuffer};
-use crate::rng::{Rng, mix, strata};
+use crate::rng::{Rng, film_point, mix};
 use crate::scene::Scene;
 use crate::simd::LANES;
 use crate::tree::{Tree, TreeFile};
@@ -276,7 +276,6 @@ impl<'s> Frame<'s> {
         mut misses: Option<&mut Vec<(usize, Vec3)>>,
     ) -> Vec<PacketPoint> {
         let cam = &self.scene.camera;
-        let (across, down) = strata(self.opts.spp);
         let light_first = s.wrapping_mul(self.light_samples());
         let mut points = Vec::with_capacity(pixels.len());
         for (k, &(x, y)) in pixels.iter().enumerate() {
@@ -284,9 +283,7 @@ impl<'s> Frame<'s> {
             let mut rng = Rng::new(
                 self.opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
             );
-            let (sx, sy) = (s % across, s / across);
-            let fx = x as f32 + (sx as f32 + rng.f32()) / across as f32;
-            let fy = y as f32 + (sy as f32 + rng.f32()) / down as f32;
+            let (fx, fy) = film_point(x, y, s, self.opts.spp, &mut rng);
             let dir = cam.ray_direction(fx, fy);
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {

@@ -18,7 +18,7 @@ use super::shading::shading_point;
 use super::trace::Tracer;
 use crate::brdf::{GlossyLobe, lambert_sample};
 use crate::error::Error;
-use crate::rng::{Rng, strata};
+use crate::rng::{Rng, film_point};
 use crate::scene::{Light, Material, Scene};
 
 /// Path-tracer settings.
@@ -140,7 +140,6 @@ pub fn render_reference(
     let lights = Lights::new(scene);
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let (across, down) = strata(opts.spp);
     let rows_done = AtomicUsize::new(0);
     progress(0, h as usize);
     let rows: Vec<Vec<Vec3>> = (0..h)
@@ -153,9 +152,7 @@ pub fn render_reference(
                     );
                     let mut sum = Vec3::ZERO;
                     for s in 0..opts.spp {
-                        let (sx, sy) = (s % across, s / across);
-                        let fx = x as f32 + (sx as f32 + rng.f32()) / across as f32;
-                        let fy = y as f32 + (sy as f32 + rng.f32()) / down as f32;
+                        let (fx, fy) = film_point(x, y, s, opts.spp, &mut rng);
                         let l = trace_path(
                             scene,
                             &tracer,
