@@ -9,7 +9,7 @@
 //!
 //! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
 
-mod common;
+use crate::common;
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 

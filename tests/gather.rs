@@ -2,7 +2,7 @@
 //! wraps, in any receiver order, scheme, path and thread count; normals a
 //! little off unit length normalised, bad receivers typed errors naming them.
 
-mod common;
+use crate::common;
 
 use common::{GLOSSY_PROBES, Pipeline, Rng, shade_with};
 use glam::Vec3;

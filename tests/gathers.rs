@@ -5,7 +5,7 @@
 //! of the gathers; a crop gets the full frame's pixels; asking for a gather
 //! per camera sample is the dense render, bit for bit.
 
-mod common;
+use crate::common;
 
 use pbgi::CutOptions;
 use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions, RenderOutput, render};

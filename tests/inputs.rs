@@ -5,7 +5,7 @@
 //!
 //! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
 
-mod common;
+use crate::common;
 
 use common::{CloudSpec, Rng, path_names, qc};
 use glam::Vec3;

@@ -3,13 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::common;
 use pbgi::render::{ReferenceOptions, RenderOptions, render_reference};
 use pbgi::report::{
     ErrorPoint, Method, PATH_TRACER, Reach, ReportError, SweepOptions, default_curves, equal_error,
     error_sweep, from_csv, time_for, to_csv,
 };
 use pbgi::scene::builtin::cornell_box;
-mod common;
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * b.abs().max(1.0)

@@ -6,7 +6,7 @@
 //! missing is always a typed error naming the file and the script.
 #![cfg(feature = "formats")]
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

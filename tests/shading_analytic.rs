@@ -1,7 +1,7 @@
 //! The whole chain (surfels → tree → cut → microbuffer → irradiance) against
 //! analytic irradiance, and bitwise identical shading for every scheme and path.
 
-mod common;
+use crate::common;
 
 use common::{Pipeline, irradiance_with};
 use glam::Vec3;

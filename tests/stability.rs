@@ -32,7 +32,7 @@
 //!
 //! `PBGI_QC_TESTS` below 50 (emulated runs) makes the clouds smaller.
 
-mod common;
+use crate::common;
 
 use common::{
     CloudSpec, ReceiverSpec, Rng, Shape, all_paths_agree, check_bounded, invariants, max_radiance,

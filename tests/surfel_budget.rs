@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-mod common;
+use crate::common;
 
 use pbgi::render::{RenderOptions, render};
 use pbgi::scene::builtin::cornell_box;

@@ -3,8 +3,8 @@
 //! frame is the one `pbgi render` gives without the tree, bit for bit. The
 //! tiles' edges are not on the 4×4 packet grid, so packets are split.
 
+use crate::common;
 use std::path::{Path, PathBuf};
-mod common;
 
 /// The measured Cornell box at 30 × 22 pixels (its meshes from tests/data).
 fn small_scene(dir: &Path) -> PathBuf {

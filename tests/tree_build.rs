@@ -5,7 +5,7 @@
 //!
 //! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
 
-mod common;
+use crate::common;
 
 use common::{TreeCase, parents_from_nodes, path_names, qc, reduced, surfels_below};
 use glam::{DVec3, Vec3};
