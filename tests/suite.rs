@@ -8,6 +8,7 @@
 mod common;
 
 mod bad_input;
+mod cli;
 mod cut_equivalence;
 mod exact;
 mod gather;

@@ -25,6 +25,7 @@ use pbgi::report::{BenchOptions, BenchRow, bench};
 use pbgi::scene::resolve;
 
 fn main() -> ExitCode {
+    default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => cmd_render(&args),
@@ -41,6 +42,26 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// A reader that closes the pipe early (`pbgi compare … | head -1`) ends
+/// `pbgi` as it ends any Unix tool. Rust starts with SIGPIPE ignored, so
+/// the write fails instead and `println!` panics ("failed printing to
+/// stdout: Broken pipe").
+fn default_sigpipe() {
+    #[cfg(unix)]
+    {
+        const SIGPIPE: i32 = 13;
+        const SIG_DFL: usize = 0;
+        unsafe extern "C" {
+            fn signal(signum: i32, handler: usize) -> usize;
+        }
+        // SAFETY: restores the default action of one signal, before any
+        // thread starts; libc's `signal` is linked by std on every Unix.
+        unsafe {
+            signal(SIGPIPE, SIG_DFL);
         }
     }
 }
