@@ -2,7 +2,7 @@
 //! here, not a test binary of its own: the release profile links every
 //! binary with fat LTO and one codegen unit, about 30 s apiece on this
 //! project, so nineteen binaries cost the README's test command about ten
-//! minutes of linking on two cores. A file's tests are named after it:
+//! CPU-minutes of linking (five on two cores). A file's tests are named after it:
 //! `cargo test --release --test suite -- gathers::` runs `tests/gathers.rs`.
 
 mod common;
