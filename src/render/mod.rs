@@ -30,6 +30,7 @@ pub mod reference;
 mod shading;
 mod share;
 mod sparse;
+mod spherical;
 mod tile;
 mod trace;
 

@@ -104,7 +104,7 @@ impl std::fmt::Display for Gathers {
 }
 
 /// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
-pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
 /// Render settings; the defaults render the Cornell box in about a second.
 #[derive(Clone, Copy, Debug, PartialEq)]

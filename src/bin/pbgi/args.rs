@@ -290,7 +290,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.1)]
     pub gather_threshold: f32,
     /// Area-light samples at each camera sample's receiver for direct light
-    /// (default 16), stratified over the lights and over the pixel's camera samples.
+    /// (default 8), stratified over the lights and over the pixel's camera samples.
     #[arg(long)]
     pub direct_samples: Option<u32>,
     /// Ambient occlusion instead of radiance.

@@ -1,0 +1,158 @@
+//! Directions uniform in the solid angle a triangle subtends (Arvo 1995,
+//! "Stratified sampling of spherical triangles", in the robust form of
+//! pbrt-v4): for direct light from a triangle close to the receiver, where
+//! sampling by area weighs points by 1/d².
+
+use glam::Vec3;
+
+/// Below this solid angle (sr) `f32` loses the triangle's spherical excess
+/// to rounding, and area sampling is as good (1/d² hardly changes across
+/// it); above it the triangle covers most of the hemisphere and the
+/// construction loses precision. pbrt-v4's bounds.
+const MIN_SOLID_ANGLE: f32 = 3e-4;
+const MAX_SOLID_ANGLE: f32 = 6.22;
+
+/// Angle between unit vectors, accurate near 0 and π.
+#[inline(always)]
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        std::f32::consts::PI - 2.0 * ((a + b).length() * 0.5).min(1.0).asin()
+    } else {
+        2.0 * ((b - a).length() * 0.5).min(1.0).asin()
+    }
+}
+
+/// The component of unit `v` orthogonal to unit `w`, normalized.
+#[inline(always)]
+fn orthogonal(v: Vec3, w: Vec3) -> Option<Vec3> {
+    (v - w * v.dot(w)).try_normalize()
+}
+
+/// A direction from `p` uniform in the solid angle of triangle `v`, for
+/// `(u0, u1) ∈ [0, 1)²`, and that solid angle; `None` where the triangle
+/// subtends too little or too much for `f32` (see [`MIN_SOLID_ANGLE`]):
+/// the caller samples by area there. Stratified in `(u0, u1)`: `u0`
+/// sweeps the triangle's area from edge `v0 v2` on, `u1` goes from `v1`.
+pub(crate) fn sample(v: &[Vec3; 3], p: Vec3, u0: f32, u1: f32) -> Option<(Vec3, f32)> {
+    let a = (v[0] - p).try_normalize()?;
+    let b = (v[1] - p).try_normalize()?;
+    let c = (v[2] - p).try_normalize()?;
+    let n_ab = a.cross(b).try_normalize()?;
+    let n_bc = b.cross(c).try_normalize()?;
+    let n_ca = c.cross(a).try_normalize()?;
+    let alpha = angle_between(n_ab, -n_ca);
+    let beta = angle_between(n_bc, -n_ab);
+    let gamma = angle_between(n_ca, -n_bc);
+    let pi = std::f32::consts::PI;
+    let omega = alpha + beta + gamma - pi;
+    if !(MIN_SOLID_ANGLE..=MAX_SOLID_ANGLE).contains(&omega) {
+        return None;
+    }
+    // The sub-triangle a b' c' of area u0·Ω: c' on arc a c.
+    let area = pi + u0 * omega;
+    let (sin_area, cos_area) = area.sin_cos();
+    let (sin_alpha, cos_alpha) = alpha.sin_cos();
+    let sin_phi = sin_area * cos_alpha - cos_area * sin_alpha;
+    let cos_phi = cos_area * cos_alpha + sin_area * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = ((k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha))
+        .clamp(-1.0, 1.0);
+    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+    let cp = a * cos_bp + orthogonal(c, a)? * sin_bp;
+    // Along arc b c', uniform in the remaining area.
+    let cos_t = 1.0 - u1 * (1.0 - cp.dot(b));
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let w = b * cos_t + orthogonal(cp, b)? * sin_t;
+    w.is_finite().then_some((w, omega))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Möller–Trumbore: whether the ray from `p` along `w` hits the triangle.
+    fn hits(v: &[Vec3; 3], p: Vec3, w: Vec3) -> bool {
+        let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+        let q = w.cross(e2);
+        let det = e1.dot(q);
+        let s = (p - v[0]) / det;
+        let (b1, r) = (s.dot(q), s.cross(e1));
+        let b2 = w.dot(r);
+        b1 >= -1e-4 && b2 >= -1e-4 && b1 + b2 <= 1.0 + 1e-4 && e2.dot(r) > 0.0
+    }
+
+    /// Every sample lies in the triangle, the solid angle is the closed
+    /// form's (Van Oosterom and Strackee), and the samples are uniform in
+    /// it: a cosine's mean over them is its integral over the triangle
+    /// (quadrature by area, `cos θ cos θ' / d²`) divided by Ω.
+    #[test]
+    fn uniform_in_the_triangle_solid_angle() {
+        let v = [
+            Vec3::new(-0.3, 0.2, 1.0),
+            Vec3::new(0.9, -0.1, 0.6),
+            Vec3::new(0.1, 0.8, 0.4),
+        ];
+        let p = Vec3::new(0.05, 0.1, 0.0);
+        let (a, b, c) = (
+            (v[0] - p).normalize(),
+            (v[1] - p).normalize(),
+            (v[2] - p).normalize(),
+        );
+        let exact = 2.0
+            * a.dot(b.cross(c))
+                .abs()
+                .atan2(1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+        let n = 256;
+        let mut mean = 0.0f64;
+        let mut omega = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let (u0, u1) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let (w, o) = sample(&v, p, u0, u1).expect("a triangle of moderate solid angle");
+                assert!(hits(&v, p, w), "sample {w} at ({u0}, {u1}) misses the triangle");
+                mean += f64::from(w.z);
+                omega = o;
+            }
+        }
+        mean /= (n * n) as f64;
+        approx::assert_relative_eq!(omega, exact, max_relative = 1e-4);
+        // ∫ cos θ dω over the triangle, by its area.
+        let normal = (v[1] - v[0]).cross(v[2] - v[0]);
+        let twice_area = normal.length();
+        let normal = normal / twice_area;
+        let m = 1024;
+        let mut integral = 0.0f64;
+        for i in 0..m {
+            for j in 0..m - i {
+                let (s, t) = (
+                    (i as f32 + 1.0 / 3.0) / m as f32,
+                    (j as f32 + 1.0 / 3.0) / m as f32,
+                );
+                let q = v[0] + (v[1] - v[0]) * s + (v[2] - v[0]) * t;
+                let d = q - p;
+                let w = d.normalize();
+                integral += f64::from(w.z * normal.dot(w).abs() / d.length_squared());
+            }
+        }
+        integral *= f64::from(twice_area) / 2.0 / (m * m / 2) as f64;
+        approx::assert_relative_eq!(mean, integral / f64::from(exact), max_relative = 2e-3);
+    }
+
+    #[test]
+    fn too_small_or_edge_on_falls_back_to_area() {
+        let v = [
+            Vec3::new(0.0, 0.0, 100.0),
+            Vec3::new(0.1, 0.0, 100.0),
+            Vec3::new(0.0, 0.1, 100.0),
+        ];
+        assert!(sample(&v, Vec3::ZERO, 0.5, 0.5).is_none());
+        let v = [
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        ];
+        assert!(sample(&v, Vec3::ZERO, 0.5, 0.5).is_none());
+    }
+}
