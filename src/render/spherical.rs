@@ -12,13 +12,68 @@ use glam::Vec3;
 const MIN_SOLID_ANGLE: f32 = 3e-4;
 const MAX_SOLID_ANGLE: f32 = 6.22;
 
+// The sine, cosine and arcsine below are polynomials in IEEE additions
+// and multiplications only (Rust fuses none), so a sample gives the same
+// bits on x86-64 and AArch64; the C library's `sinf` and `asinf` differ
+// between them (and between its FMA and plain x86 variants).
+
+/// `(sin x, cos x)` for `|x|` up to a few hundred: Cody–Waite reduction by
+/// π/2, then Taylor series to x⁹ and x⁸ on `[−π/4, π/4]` (truncation below
+/// 3·10⁻⁸).
+#[inline(always)]
+fn sin_cos(x: f32) -> (f32, f32) {
+    // π/2 in two parts: the first exact in f32 with zeros in its low bits.
+    const HALF_PI_HI: f32 = 1.570_312_5;
+    const HALF_PI_LO: f32 = 4.838_267_9e-4;
+    let k = (x * std::f32::consts::FRAC_2_PI).round();
+    let r = (x - k * HALF_PI_HI) - k * HALF_PI_LO;
+    let r2 = r * r;
+    let s = r + r * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0))));
+    let c = 1.0 + r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0))));
+    match (k as i32).rem_euclid(4) {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+/// `asin x` for `x ∈ [0, 1]`: its series to x²¹ up to ½ (truncation below
+/// 10⁻⁸), and `π/2 − 2 asin √((1 − x)/2)` above.
+#[inline(always)]
+fn asin(x: f32) -> f32 {
+    #[inline(always)]
+    fn series(x: f32) -> f32 {
+        const C: [f32; 10] = [
+            0.166_666_67,
+            0.075,
+            0.044_642_857,
+            0.030_381_944,
+            0.022_372_159,
+            0.017_352_764,
+            0.013_964_844,
+            0.011_551_801,
+            0.009_761_61,
+            0.008_390_336,
+        ];
+        let x2 = x * x;
+        let p = C.iter().rev().fold(0.0, |acc, &c| acc * x2 + c);
+        x + x * x2 * p
+    }
+    if x <= 0.5 {
+        series(x)
+    } else {
+        std::f32::consts::FRAC_PI_2 - 2.0 * series(((1.0 - x) * 0.5).max(0.0).sqrt())
+    }
+}
+
 /// Angle between unit vectors, accurate near 0 and π.
 #[inline(always)]
 fn angle_between(a: Vec3, b: Vec3) -> f32 {
     if a.dot(b) < 0.0 {
-        std::f32::consts::PI - 2.0 * ((a + b).length() * 0.5).min(1.0).asin()
+        std::f32::consts::PI - 2.0 * asin(((a + b).length() * 0.5).min(1.0))
     } else {
-        2.0 * ((b - a).length() * 0.5).min(1.0).asin()
+        2.0 * asin(((b - a).length() * 0.5).min(1.0))
     }
 }
 
@@ -50,8 +105,8 @@ pub(crate) fn sample(v: &[Vec3; 3], p: Vec3, u0: f32, u1: f32) -> Option<(Vec3, 
     }
     // The sub-triangle a b' c' of area u0·Ω: c' on arc a c.
     let area = pi + u0 * omega;
-    let (sin_area, cos_area) = area.sin_cos();
-    let (sin_alpha, cos_alpha) = alpha.sin_cos();
+    let (sin_area, cos_area) = sin_cos(area);
+    let (sin_alpha, cos_alpha) = sin_cos(alpha);
     let sin_phi = sin_area * cos_alpha - cos_area * sin_alpha;
     let cos_phi = cos_area * cos_alpha + sin_area * sin_alpha;
     let k1 = cos_phi + cos_alpha;
@@ -138,6 +193,28 @@ mod tests {
         }
         integral *= f64::from(twice_area) / 2.0 / (m * m / 2) as f64;
         approx::assert_relative_eq!(mean, integral / f64::from(exact), max_relative = 2e-3);
+    }
+
+    /// The polynomials against the C library, over their ranges here.
+    #[test]
+    fn sine_cosine_and_arcsine() {
+        for i in 0..=20_000 {
+            let x = -20.0 + 40.0 * i as f32 / 20_000.0;
+            let (s, c) = sin_cos(x);
+            let (x64, s64, c64) = (f64::from(x), f64::from(x).sin(), f64::from(x).cos());
+            assert!(
+                (f64::from(s) - s64).abs() < 4e-7 && (f64::from(c) - c64).abs() < 4e-7,
+                "sin_cos({x64})"
+            );
+        }
+        for i in 0..=20_000 {
+            let x = i as f32 / 20_000.0;
+            let a = f64::from(asin(x));
+            assert!(
+                (a - f64::from(x).asin()).abs() <= 3e-7 * f64::from(x).asin().max(1e-3),
+                "asin({x})"
+            );
+        }
     }
 
     #[test]
