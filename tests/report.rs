@@ -259,7 +259,7 @@ fn a_small_sweep_measures_every_curve() {
     let reference = render_reference(&scene, &o, &|_, _| {}).unwrap().image;
     let base = RenderOptions::default();
     let opts = SweepOptions {
-        curves: default_curves(&base, &[1, 4]),
+        curves: default_curves(&base, &[1, 4], scene.has_emitters()),
         path_tracer_spp: vec![4, 64],
         bounces: base.bounces,
     };
@@ -269,17 +269,32 @@ fn a_small_sweep_measures_every_curve() {
         "Ω {}",
         ((f64::from(base.cut.max_solid_angle) * 0.4 * 1e4).round() / 1e4) as f32
     );
+    // An area light: the base and the coarse gather again at two direct
+    // samples per camera sample, from 8 spp on; without one those curves
+    // would repeat the others' images.
     assert_eq!(
         labels,
-        ["defaults", small.as_str(), "dense gathers", "Ω 0.5, N 8"]
+        [
+            "defaults",
+            small.as_str(),
+            "dense gathers",
+            "Ω 0.5, N 8",
+            "2 direct samples",
+            "Ω 0.5, N 8, 2 direct samples"
+        ]
     );
+    let unlit: Vec<String> = default_curves(&base, &[1, 4], false)
+        .into_iter()
+        .map(|c| c.label)
+        .collect();
+    assert_eq!(unlit, ["defaults", small.as_str(), "dense gathers", "Ω 0.5, N 8"]);
     let last = std::sync::Mutex::new(None);
     let points = error_sweep(&scene, &reference, &opts, &|p| {
         *last.lock().unwrap() = Some(p.clone())
     })
     .unwrap();
     let last = last.into_inner().unwrap().unwrap();
-    assert_eq!((last.done, last.images, last.remaining_s), (13, 13, Some(0.0)));
+    assert_eq!((last.done, last.images, last.remaining_s), (17, 17, Some(0.0)));
     let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
     assert_eq!(
         order,
@@ -295,6 +310,10 @@ fn a_small_sweep_measures_every_curve() {
             ("Ω 0.5, N 8", 4),
             ("Ω 0.5, N 8", 8),
             ("Ω 0.5, N 8", 16),
+            ("2 direct samples", 8),
+            ("2 direct samples", 16),
+            ("Ω 0.5, N 8, 2 direct samples", 8),
+            ("Ω 0.5, N 8, 2 direct samples", 16),
             (PATH_TRACER, 4),
             (PATH_TRACER, 64)
         ]

@@ -250,7 +250,9 @@ mod tests {
     /// The longest side of triangle `v` seen from `p` (radians).
     fn longest(v: &[Vec3; 3], p: Vec3) -> f32 {
         let d = v.map(|q| (q - p).normalize());
-        (0..3).map(|i| d[i].angle_between(d[(i + 1) % 3])).fold(0.0, f32::max)
+        (0..3)
+            .map(|i| d[i].angle_between(d[(i + 1) % 3]))
+            .fold(0.0, f32::max)
     }
 
     /// Slivers and needles, seen from close by at every orientation: each
@@ -273,7 +275,11 @@ mod tests {
             // lies on its base.
             for v in [
                 [Vec3::ZERO, Vec3::new(c, s, 0.3), Vec3::new(c, s + thin, 0.3)],
-                [Vec3::new(-1.0, 0.0, 0.2), Vec3::new(1.0, 0.0, 0.2), Vec3::new(0.1 * c, thin, 0.2)],
+                [
+                    Vec3::new(-1.0, 0.0, 0.2),
+                    Vec3::new(1.0, 0.0, 0.2),
+                    Vec3::new(0.1 * c, thin, 0.2),
+                ],
             ] {
                 for i in 0..16 {
                     for j in 0..16 {
@@ -281,7 +287,10 @@ mod tests {
                         if let Some((w, omega)) = sample(&v, p, u0, u1) {
                             let m = miss(&v, p, w) / (omega / longest(&v, p));
                             worst = worst.max(m);
-                            assert!(w.is_finite() && m < 0.25, "{w} for {v:?} from {p}: {m} of the width");
+                            assert!(
+                                w.is_finite() && m < 0.25,
+                                "{w} for {v:?} from {p}: {m} of the width"
+                            );
                             sampled += 1;
                         }
                     }

@@ -254,12 +254,15 @@ impl Scene {
 
     /// Whether anything emits light: a light, an emitting mesh, an environment.
     pub fn has_light(&self) -> bool {
-        !self.lights.is_empty()
-            || self.environment.is_some()
-            || self
-                .meshes
-                .iter()
-                .any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
+        !self.lights.is_empty() || self.environment.is_some() || self.has_emitters()
+    }
+
+    /// Whether a mesh emits light: the area lights that direct-light
+    /// samples go to (point lights and the sun take one shadow ray each).
+    pub fn has_emitters(&self) -> bool {
+        self.meshes
+            .iter()
+            .any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
     }
 
     /// A scene with no light at all gets a sky (uniform, [`DEFAULT_SKY`]) and

@@ -104,9 +104,10 @@ pub struct ReportArgs {
     /// Redraw error.png and error.svg from OUT/error.csv (a finished sweep) and print its table, without rendering.
     #[arg(long)]
     pub replot: bool,
-    /// Light samples per receiver for direct light (default: as `pbgi render`).
-    #[arg(long)]
-    pub direct_samples: Option<u32>,
+    /// Curves at these area-light samples per camera sample (comma-separated;
+    /// default: as `pbgi render`, and 2 from 8 spp on where the scene has area lights).
+    #[arg(long, value_delimiter = ',')]
+    pub direct_samples: Vec<u32>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,

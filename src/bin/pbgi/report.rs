@@ -47,10 +47,10 @@ fn replot(a: &ReportArgs) -> Res<()> {
 }
 
 /// The sweep `a` asks for: the default curves, or one per combination of
-/// the lists given (`--full` fills those not given with the old sweep's).
-fn sweep_options(a: &ReportArgs) -> Res<SweepOptions> {
-    let mut base = a.settings.for_scene(&a.scene, a.settings.options(1)?);
-    base.direct_samples = a.direct_samples.or(base.direct_samples);
+/// the lists given (`--full` fills those not given with the old sweep's),
+/// for a scene with or without area lights (`emitters`).
+fn sweep_options(a: &ReportArgs, emitters: bool) -> Res<SweepOptions> {
+    let base = a.settings.for_scene(&a.scene, a.settings.options(1)?);
     let mut grid = if a.full {
         Grid::full(&base)
     } else {
@@ -68,9 +68,10 @@ fn sweep_options(a: &ReportArgs) -> Res<SweepOptions> {
     if !a.schemes.is_empty() {
         grid.schemes = parse_choices(&a.schemes)?;
     }
+    grid.direct_samples.clone_from(&a.direct_samples);
     let spp = a.spp.clone().unwrap_or_else(|| DEFAULT_SPP.to_vec());
     let curves = if grid.is_empty() {
-        default_curves(&base, &spp)
+        default_curves(&base, &spp, emitters)
     } else {
         grid.curves(&base, &spp)
     };
@@ -97,8 +98,8 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
         return replot(a);
     }
     let targets = targets(a)?;
-    let sweep = sweep_options(a)?;
     let scene = load_scene(&a.scene)?;
+    let sweep = sweep_options(a, scene.has_emitters())?;
     let pool = thread_pool(a.threads)?;
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let reference_note;
