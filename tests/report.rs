@@ -279,6 +279,7 @@ fn a_small_sweep_measures_every_curve() {
             small.as_str(),
             "dense gathers",
             "Ω 0.5, N 8",
+            "N 10",
             "2 direct samples",
             "Ω 0.5, N 8, 2 direct samples"
         ]
@@ -287,14 +288,17 @@ fn a_small_sweep_measures_every_curve() {
         .into_iter()
         .map(|c| c.label)
         .collect();
-    assert_eq!(unlit, ["defaults", small.as_str(), "dense gathers", "Ω 0.5, N 8"]);
+    assert_eq!(
+        unlit,
+        ["defaults", small.as_str(), "dense gathers", "Ω 0.5, N 8", "N 10"]
+    );
     let last = std::sync::Mutex::new(None);
     let points = error_sweep(&scene, &reference, &opts, &|p| {
         *last.lock().unwrap() = Some(p.clone())
     })
     .unwrap();
     let last = last.into_inner().unwrap().unwrap();
-    assert_eq!((last.done, last.images, last.remaining_s), (17, 17, Some(0.0)));
+    assert_eq!((last.done, last.images, last.remaining_s), (19, 19, Some(0.0)));
     let order: Vec<(&str, u32)> = points.iter().map(|p| (p.label.as_str(), p.spp)).collect();
     assert_eq!(
         order,
@@ -310,6 +314,8 @@ fn a_small_sweep_measures_every_curve() {
             ("Ω 0.5, N 8", 4),
             ("Ω 0.5, N 8", 8),
             ("Ω 0.5, N 8", 16),
+            ("N 10", 8),
+            ("N 10", 16),
             ("2 direct samples", 8),
             ("2 direct samples", 16),
             ("Ω 0.5, N 8, 2 direct samples", 8),

@@ -157,6 +157,12 @@ const SMALL_OMEGA_MIN_SPP: u32 = 4;
 /// loses by it (BENCHMARKS.md, "The fast side of the curve").
 const COARSE: (f32, usize) = (0.5, 8);
 
+/// Between the coarse gather and the base's: the base's Ω at this
+/// microbuffer resolution, from [`FEW_DIRECT_SAMPLES_MIN_SPP`] camera
+/// samples on, where the coarse gather's bias shows (Sponza at 32 spp: Ω
+/// 0.15, N 10, 1.94 % in 14.4 s; N 14, 1.85 % in 18.7 s; Ω 0.5, N 8, 2.40 %).
+const MEDIUM_MICROBUFFER: usize = 10;
+
 /// Area-light samples per camera sample along the curves that spend the
 /// direct light's rays on camera samples instead.
 const FEW_DIRECT_SAMPLES: u32 = 2;
@@ -167,7 +173,8 @@ const FEW_DIRECT_SAMPLES_MIN_SPP: u32 = 8;
 /// The default curves: `base` (what `pbgi render` uses) at every `spp` and
 /// 2× and 4× the last, Ω 0.4× the base's at the higher ones, dense gathers
 /// at the lower ones, and the coarse gather [`COARSE`] at the base's, where
-/// the base is finer. With `emitters` (area lights: `Scene::has_emitters`),
+/// the base is finer; the base's Ω at N [`MEDIUM_MICROBUFFER`] from
+/// [`FEW_DIRECT_SAMPLES_MIN_SPP`] on. With `emitters` (area lights: `Scene::has_emitters`),
 /// the base and the coarse gather again at [`FEW_DIRECT_SAMPLES`] per
 /// camera sample from [`FEW_DIRECT_SAMPLES_MIN_SPP`] on: a pixel's light
 /// noise falls with its light samples whichever camera sample takes them,
@@ -219,6 +226,21 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32], emitters: bool) -> Vec<
                 ..Variant::default()
             },
             if coarse { extended.clone() } else { Vec::new() },
+        ),
+        (
+            Variant {
+                microbuffer: Some(MEDIUM_MICROBUFFER),
+                ..Variant::default()
+            },
+            if base.microbuffer > MEDIUM_MICROBUFFER {
+                extended
+                    .iter()
+                    .copied()
+                    .filter(|&s| s >= FEW_DIRECT_SAMPLES_MIN_SPP)
+                    .collect()
+            } else {
+                Vec::new()
+            },
         ),
         (
             Variant {

@@ -76,7 +76,8 @@ pub struct ReportArgs {
     pub out: PathBuf,
     /// Camera samples per pixel along each point-based curve (comma-separated;
     /// default 1,2,4,8,16, the default curves of Ω 0.4× and dense gathers a part of it;
-    /// the coarse curve, Ω 0.5 and N 8, all of it and 2× and 4× its last).
+    /// the coarse curve, Ω 0.5 and N 8, all of it and 2× and 4× its last; N 10 and
+    /// 2 direct samples from 8 spp on).
     #[arg(long, value_delimiter = ',')]
     pub spp: Option<Vec<u32>>,
     /// Paths per pixel along the path tracer's curve (comma-separated; default
