@@ -30,7 +30,7 @@ const MIN_WIDTH: f32 = 1e-3;
 fn sin_cos(x: f32) -> (f32, f32) {
     // π/2 in two parts: the first exact in f32 with zeros in its low bits.
     const HALF_PI_HI: f32 = 1.570_312_5;
-    const HALF_PI_LO: f32 = 4.838_267_9e-4;
+    const HALF_PI_LO: f32 = 4.838_268e-4;
     let k = (x * std::f32::consts::FRAC_2_PI).round();
     let r = (x - k * HALF_PI_HI) - k * HALF_PI_LO;
     let r2 = r * r;
@@ -53,7 +53,7 @@ fn asin(x: f32) -> f32 {
         const C: [f32; 10] = [
             0.166_666_67,
             0.075,
-            0.044_642_857,
+            0.044_642_86,
             0.030_381_944,
             0.022_372_159,
             0.017_352_764,

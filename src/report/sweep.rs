@@ -157,26 +157,26 @@ const SMALL_OMEGA_MIN_SPP: u32 = 4;
 /// loses by it (BENCHMARKS.md, "The fast side of the curve").
 const COARSE: (f32, usize) = (0.5, 8);
 
+/// The curves below start here: they trade a little of the gather's or the
+/// direct light's accuracy for time, which pays only once the camera
+/// samples' noise is low.
+const LATE_MIN_SPP: u32 = 8;
 /// Between the coarse gather and the base's: the base's Ω at this
-/// microbuffer resolution, from [`FEW_DIRECT_SAMPLES_MIN_SPP`] camera
-/// samples on, where the coarse gather's bias shows (Sponza at 32 spp: Ω
-/// 0.15, N 10, 1.94 % in 14.4 s; N 14, 1.85 % in 18.7 s; Ω 0.5, N 8, 2.40 %).
+/// microbuffer resolution, where the coarse gather's bias shows (Sponza at
+/// 32 spp: Ω 0.15, N 10, 1.94 % in 14.4 s; N 14, 1.85 % in 18.7 s; Ω 0.5,
+/// N 8, 2.40 %).
 const MEDIUM_MICROBUFFER: usize = 10;
-
 /// Area-light samples per camera sample along the curves that spend the
 /// direct light's rays on camera samples instead.
 const FEW_DIRECT_SAMPLES: u32 = 2;
-/// Those curves start here: at fewer camera samples their light noise
-/// dominates.
-const FEW_DIRECT_SAMPLES_MIN_SPP: u32 = 8;
 
 /// The default curves: `base` (what `pbgi render` uses) at every `spp` and
 /// 2× and 4× the last, Ω 0.4× the base's at the higher ones, dense gathers
 /// at the lower ones, and the coarse gather [`COARSE`] at the base's, where
-/// the base is finer; the base's Ω at N [`MEDIUM_MICROBUFFER`] from
-/// [`FEW_DIRECT_SAMPLES_MIN_SPP`] on. With `emitters` (area lights: `Scene::has_emitters`),
-/// the base and the coarse gather again at [`FEW_DIRECT_SAMPLES`] per
-/// camera sample from [`FEW_DIRECT_SAMPLES_MIN_SPP`] on: a pixel's light
+/// the base is finer; from [`LATE_MIN_SPP`] on, the base's Ω at N
+/// [`MEDIUM_MICROBUFFER`], and with `emitters` (area lights:
+/// `Scene::has_emitters`) the base and the coarse gather again at
+/// [`FEW_DIRECT_SAMPLES`] per camera sample: a pixel's light
 /// noise falls with its light samples whichever camera sample takes them,
 /// its edges' noise only with camera samples (the nave at 32 spp × 2 is at
 /// 2.95 % where 16 × 8 is at 3.41 %, in the same time).
@@ -190,16 +190,9 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32], emitters: bool) -> Vec<
     let last = spp.iter().copied().max().unwrap_or(1);
     let extended: Vec<u32> = spp.iter().copied().chain([2 * last, 4 * last]).collect();
     let coarse = base.cut.max_solid_angle < COARSE.0 && base.microbuffer > COARSE.1;
-    let few = |spp: &[u32]| -> Vec<u32> {
-        if emitters && base.light_samples() > FEW_DIRECT_SAMPLES {
-            spp.iter()
-                .copied()
-                .filter(|&s| s >= FEW_DIRECT_SAMPLES_MIN_SPP)
-                .collect()
-        } else {
-            Vec::new()
-        }
-    };
+    let late: Vec<u32> = extended.iter().copied().filter(|&s| s >= LATE_MIN_SPP).collect();
+    let when = |yes: bool| if yes { late.clone() } else { Vec::new() };
+    let few = emitters && base.light_samples() > FEW_DIRECT_SAMPLES;
     let variants = [
         (Variant::default(), extended.clone()),
         (
@@ -232,22 +225,14 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32], emitters: bool) -> Vec<
                 microbuffer: Some(MEDIUM_MICROBUFFER),
                 ..Variant::default()
             },
-            if base.microbuffer > MEDIUM_MICROBUFFER {
-                extended
-                    .iter()
-                    .copied()
-                    .filter(|&s| s >= FEW_DIRECT_SAMPLES_MIN_SPP)
-                    .collect()
-            } else {
-                Vec::new()
-            },
+            when(base.microbuffer > MEDIUM_MICROBUFFER),
         ),
         (
             Variant {
                 direct_samples: Some(FEW_DIRECT_SAMPLES),
                 ..Variant::default()
             },
-            few(&extended),
+            when(few),
         ),
         (
             Variant {
@@ -256,7 +241,7 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32], emitters: bool) -> Vec<
                 direct_samples: Some(FEW_DIRECT_SAMPLES),
                 ..Variant::default()
             },
-            if coarse { few(&extended) } else { Vec::new() },
+            when(few && coarse),
         ),
     ];
     let mut curves: Vec<Curve> = Vec::new();
