@@ -281,7 +281,7 @@ impl Lights {
             };
             let mut area_sum = Vec3::ZERO;
             for s in 0..samples {
-                if !(total > 0.0) {
+                if total <= 0.0 {
                     break;
                 }
                 // The first coordinate picks a group, within its share a
@@ -301,7 +301,7 @@ impl Lights {
                 };
                 let (v, ln, radiance) = &self.triangles[k];
                 // Seen from its back, an emitter gives nothing.
-                if !(picked > 0.0) || ln.dot(origin - v[0]) <= 0.0 {
+                if picked <= 0.0 || ln.dot(origin - v[0]) <= 0.0 {
                     continue;
                 }
                 // A triangle close by is sampled uniformly in the solid
@@ -326,7 +326,7 @@ impl Lights {
                     }
                 };
                 let cos_r = n.dot(wi);
-                if cos_r <= 0.0 || weight <= 0.0 || !(dist > 0.0) {
+                if cos_r <= 0.0 || weight <= 0.0 || dist <= 0.0 {
                     continue;
                 }
                 if tracer.occluded(origin, wi, dist * (1.0 - 1e-4) - eps) {
