@@ -145,15 +145,19 @@ pub struct Lights {
     others: Vec<Light>,
 }
 
-/// Twice the area of a triangle and its unit normal, `None` when degenerate
-/// or overflowing `f32` (such a triangle is neither lit by nor lights
-/// anything: left out of the surfels and of the emitters alike). The normal is normalized in `f64`: the cross product of a
-/// sliver triangle can be subnormal, and its `f32` length too coarse for a
-/// unit normal.
+/// Twice the area of a triangle and its unit normal, `None` when its area
+/// is not a normal `f32` (degenerate, underflowing or overflowing): such a
+/// triangle is neither lit by nor lights anything, left out of the surfels
+/// and of the emitters alike. A subnormal area would round to zero when
+/// halved, and a group of such emitters would divide by it. The normal is
+/// normalized in `f64`: the cross product of a sliver triangle can be
+/// subnormal, and its `f32` length too coarse for a unit normal.
 pub(crate) fn triangle(v: [Vec3; 3]) -> Option<(f32, Vec3)> {
     let c = (v[1] - v[0]).cross(v[2] - v[0]).as_dvec3();
     let len = c.length();
-    (len > 0.0 && len.is_finite() && (len as f32).is_finite()).then(|| (len as f32, (c / len).as_vec3()))
+    (0.5 * len as f32)
+        .is_normal()
+        .then(|| (len as f32, (c / len).as_vec3()))
 }
 
 impl Lights {
