@@ -456,4 +456,59 @@ mod tests {
             approx::assert_relative_eq!(f64::from(got.x), exact, max_relative = 2e-3);
         }
     }
+
+    /// A triangle is kept only while its area is a normal `f32`: one of
+    /// area 4.5e-46 (subnormal) made a group of emitters of area zero,
+    /// whose centroid and estimate were 0/0 at every receiver.
+    #[test]
+    fn triangles_whose_area_is_not_a_normal_f32_are_left_out() {
+        let tiny = [Vec3::ZERO, Vec3::new(3e-23, 0.0, 0.0), Vec3::new(0.0, 3e-23, 0.0)];
+        assert!(triangle(tiny).is_none());
+        let small = [Vec3::ZERO, Vec3::new(1e-18, 0.0, 0.0), Vec3::new(0.0, 1e-18, 0.0)];
+        assert!(triangle(small).is_some_and(|(twice, n)| twice.is_normal() && n == Vec3::Z));
+        let huge = [
+            Vec3::new(-1e37, 0.0, 0.0),
+            Vec3::new(1e37, 0.0, 0.0),
+            Vec3::new(0.0, 3e38, 1e37),
+        ];
+        assert!(triangle(huge).is_none());
+        // A light holding the tiny triangle beside a real one: every
+        // receiver's estimate stays finite.
+        let mut light = quad(
+            "light",
+            [
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(1.0, 1.0, 1.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            4.0,
+        );
+        light.positions.extend(tiny);
+        light.triangles.push([4, 5, 6]);
+        let scene = Scene {
+            name: "tiny emitter".into(),
+            meshes: vec![light],
+            materials: vec![Material::diffuse("white", Vec3::ONE)],
+            lights: vec![],
+            environment: None,
+            camera: Camera {
+                origin: Vec3::new(0.5, 0.5, 3.0),
+                target: Vec3::new(0.5, 0.5, 0.0),
+                up: Vec3::Y,
+                fov_degrees: 40.0,
+                fov_axis: FovAxis::Smaller,
+                width: 8,
+                height: 8,
+            },
+            warnings: vec![],
+        };
+        let lights = Lights::new(&scene);
+        assert_eq!(lights.triangles.len(), 2);
+        let tracer = Tracer::new(&scene);
+        let got = lights.reflected(&tracer, Vec3::new(0.5, 0.0, 0.5), Vec3::Y, 8, 0, [1, 2], |_| {
+            Vec3::ONE
+        });
+        assert!(got.is_finite() && got.x > 0.0, "{got}");
+    }
 }
