@@ -390,6 +390,27 @@ mod tests {
         }
     }
 
+    /// A scene of `meshes` alone, one grey material, no occluder.
+    fn emitters(name: &str, meshes: Vec<Mesh>) -> Scene {
+        Scene {
+            name: name.into(),
+            meshes,
+            materials: vec![Material::diffuse("grey", Vec3::splat(0.5))],
+            lights: vec![],
+            environment: None,
+            camera: Camera {
+                origin: Vec3::new(0.0, 1.0, 3.0),
+                target: Vec3::ZERO,
+                up: Vec3::Y,
+                fov_degrees: 40.0,
+                fov_axis: FovAxis::Smaller,
+                width: 8,
+                height: 8,
+            },
+            warnings: vec![],
+        }
+    }
+
     /// Three emitters over an open floor: a bright panel just above the
     /// receivers (its corner within a few of its sizes), a dim distant
     /// one, and one that faces away; no occluder. The estimate of
@@ -414,27 +435,14 @@ mod tests {
         let (mut near, mut far) = (near, far);
         near.reverse();
         far.reverse();
-        let scene = Scene {
-            name: "three panels".into(),
-            meshes: vec![
+        let scene = emitters(
+            "three panels",
+            vec![
                 quad("near", near, 5.0),
                 quad("far", far, 1.0),
                 quad("away", away, 3.0),
             ],
-            materials: vec![Material::diffuse("floor", Vec3::splat(0.5))],
-            lights: vec![],
-            environment: None,
-            camera: Camera {
-                origin: Vec3::new(0.0, 1.0, 3.0),
-                target: Vec3::ZERO,
-                up: Vec3::Y,
-                fov_degrees: 40.0,
-                fov_axis: FovAxis::Smaller,
-                width: 8,
-                height: 8,
-            },
-            warnings: vec![],
-        };
+        );
         let lights = Lights::new(&scene);
         assert_eq!(lights.groups.len(), 3);
         let tracer = Tracer::new(&scene);
@@ -486,23 +494,7 @@ mod tests {
         );
         light.positions.extend(tiny);
         light.triangles.push([4, 5, 6]);
-        let scene = Scene {
-            name: "tiny emitter".into(),
-            meshes: vec![light],
-            materials: vec![Material::diffuse("white", Vec3::ONE)],
-            lights: vec![],
-            environment: None,
-            camera: Camera {
-                origin: Vec3::new(0.5, 0.5, 3.0),
-                target: Vec3::new(0.5, 0.5, 0.0),
-                up: Vec3::Y,
-                fov_degrees: 40.0,
-                fov_axis: FovAxis::Smaller,
-                width: 8,
-                height: 8,
-            },
-            warnings: vec![],
-        };
+        let scene = emitters("tiny emitter", vec![light]);
         let lights = Lights::new(&scene);
         assert_eq!(lights.triangles.len(), 2);
         let tracer = Tracer::new(&scene);
