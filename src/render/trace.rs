@@ -98,7 +98,7 @@ impl Tracer {
     /// The closest hit along `origin + t·dir`, `t ∈ (0, t_max)`; `dir` unit.
     pub fn closest(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         let mut hit = RayHit::none();
         if !bvh.ray_traverse(ray, &mut hit, |r, id| intersect(&self.triangles[id], r).0) {
             return None;
@@ -125,9 +125,19 @@ impl Tracer {
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         !bvh.ray_traverse_miss(ray, |r, id| intersect(&self.triangles[id], r).0)
     }
+}
+
+/// `v` with each `-0.0` made `+0.0` (`x + 0.0` is `x` otherwise). obvhs's
+/// wide BVH picks a node's slab planes by `dir < 0` (false for `-0.0`) but
+/// divides by `safe_inverse(dir)`, negative for `-0.0`: a ray with a `-0.0`
+/// component (an axis-aligned direction built from products with negative
+/// zeros) met nothing at all.
+#[inline(always)]
+fn positive_zeros(v: Vec3) -> Vec3 {
+    v + Vec3::ZERO
 }
 
 /// Möller–Trumbore, two-sided: `(t, barycentrics)`, `t = ∞` on a miss.
@@ -163,5 +173,32 @@ fn intersect(tri: &Triangle, ray: &Ray) -> (f32, Vec2) {
         (t, Vec2::new(u, v))
     } else {
         (f32::INFINITY, Vec2::ZERO)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::Tracer;
+    use crate::scene::builtin::cornell_box;
+
+    /// A ray along −z towards the Cornell box's back wall hits it whatever
+    /// the signs of its zero components (obvhs's wide BVH missed
+    /// everything with a `-0.0` in the direction).
+    #[test]
+    fn a_direction_with_negative_zeros_hits() {
+        let tracer = Tracer::new(&cornell_box());
+        let origin = Vec3::new(0.1, 0.5, 0.0);
+        for dir in [
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(-0.0, 0.0, -1.0),
+            Vec3::new(0.0, -0.0, -1.0),
+            -Vec3::Z,
+        ] {
+            let hit = tracer.closest(origin, dir, 10.0);
+            assert_eq!(hit.map(|h| h.t), Some(1.0), "{dir:?}");
+            assert!(tracer.occluded(origin, dir, 10.0), "{dir:?}");
+        }
     }
 }
