@@ -142,8 +142,10 @@ pub fn render_reference(
     let (w, h) = (cam.width, cam.height);
     let rows_done = AtomicUsize::new(0);
     progress(0, h as usize);
+    // Every row its own job, as the renderer's tiles (`Frame::render`).
     let rows: Vec<Vec<Vec3>> = (0..h)
         .into_par_iter()
+        .with_max_len(1)
         .map(|y| {
             let row: Vec<Vec3> = (0..w)
                 .map(|x| {
