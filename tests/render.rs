@@ -1,4 +1,5 @@
-//! Whole renders: every scheme and path gives the same image bit for bit;
+//! Whole renders: every scheme, path and thread count gives the same image
+//! bit for bit;
 //! the stages a scene does not need are left out; no NaN leaves the renderer.
 
 use glam::{DVec3, Vec3};
@@ -88,6 +89,44 @@ fn same_image_everywhere(scene: &pbgi::scene::Scene, v: usize) {
                 "same (receiver, node) pairs visited"
             );
         }
+    }
+}
+
+/// Each tile (and path-traced row) is its own job, taken by whichever
+/// thread is free: the image is the same on any pool, bit for bit.
+#[test]
+fn images_are_the_same_on_any_number_of_threads() {
+    use pbgi::render::{ReferenceOptions, render_reference};
+    let scene = small(cornell_box());
+    let o = RenderOptions {
+        scheme: SchemeChoice::Auto,
+        ..opts(Scheme::Packet, Isa::Portable)
+    };
+    let r = ReferenceOptions {
+        spp: 4,
+        ..Default::default()
+    };
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            (
+                bits(&render(&scene, &o, &|_, _| {}).unwrap().image),
+                bits(&render_reference(&scene, &r, &|_, _| {}).unwrap().image),
+            )
+        })
+    };
+    let (points, paths) = on(1);
+    assert!(
+        points.iter().any(|&b| f32::from_bits(b) > 0.01),
+        "a black image proves nothing"
+    );
+    for threads in [2, 3] {
+        let (p, t) = on(threads);
+        assert_eq!(p, points, "point-based image on {threads} threads");
+        assert_eq!(t, paths, "path-traced image on {threads} threads");
     }
 }
 
