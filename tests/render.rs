@@ -1,6 +1,6 @@
 //! Whole renders: every scheme, path and thread count gives the same image
-//! bit for bit;
-//! the stages a scene does not need are left out; no NaN leaves the renderer.
+//! bit for bit; the stages a scene does not need are left out; no NaN leaves
+//! the renderer.
 
 use glam::{DVec3, Vec3};
 use pbgi::render::{Gathers, RenderOptions, render};
