@@ -4,15 +4,21 @@
 //!
 //! ```text
 //! cargo run --release --no-default-features --example exact -- \
-//!     [--scenes light,bounce,open,blocker] [--omega 0.1,0.05,…] [--n 8,12,…]
+//!     [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
 //!     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid]
-//!     [--offset 2e-5] [--min-ms 30] [--dump] [--class mid|edge|corner]
-//!     [--light-offset K]
+//!     [--offset 2e-5] [--min-ms 30] [--dump] [--class mid|edge|corner|window]
+//!     [--light-offset K] [--dark-inside]
 //! ```
 //!
 //! Scenes: `light`, the closed room with a small bright ceiling light;
 //! `bounce`, the same without the light's surfels (a hole); `open`, the room
-//! without its ceiling; `blocker`, the lit room with a slab under the light.
+//! without its ceiling; `blocker`, the lit room with a slab under the light;
+//! the openings of [`pbgi::exact::opening`]: `window` (a window in a single
+//! sheet under a uniform sky), `sunroom` (the window through a wall 0.075
+//! thick, a sunlit floor patch, sky, the outside lit), `shell` and
+//! `thin-shell` (closed walls 0.075 and 0.02 thick, the outside lit and a
+//! sky: no light of the outside's arrives inside). `--dark-inside` makes
+//! the room's own walls black: only what comes through the window lights it.
 //! Density `k` samples each 1/8-wide cell with k×k surfels (2: 6k surfels,
 //! 4: 25k, 8: 98k). Errors are in percent, relative per receiver; `µs` is
 //! the irradiance gather (traversal, splatting, convolution) per receiver,
@@ -31,9 +37,9 @@ use pbgi::Scheme;
 use pbgi::brdf::GlossyLobe;
 use pbgi::exact::{Gather, Quantity, RoomSpec, Scene, gather, stats};
 
-const USAGE: &str = "usage: exact [--scenes light,bounce,open,blocker] [--omega 0.1,0.05,…] [--n 8,12,…]
+const USAGE: &str = "usage: exact [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid] [--offset 2e-5]
-    [--min-ms 30] [--dump] [--class mid|edge|corner] [--light-offset K]";
+    [--min-ms 30] [--dump] [--class mid|edge|corner|window] [--light-offset K] [--dark-inside]";
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
     s.split(',').filter_map(|x| x.trim().parse().ok()).collect()
@@ -47,6 +53,7 @@ fn main() {
     let mut what = vec!["irr".to_string(), "occ".to_string(), "glossy".to_string()];
     let (mut lanes, mut jitter, mut offset, mut min_ms, mut dump) = (true, true, 2e-5f32, 30.0f64, false);
     let mut class = String::new();
+    let mut dark = false;
     let mut light_offset = 0.0f32;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -69,6 +76,11 @@ fn main() {
             }
             "--dump" => {
                 dump = true;
+                i += 1;
+                continue;
+            }
+            "--dark-inside" => {
+                dark = true;
                 i += 1;
                 continue;
             }
@@ -110,11 +122,17 @@ fn main() {
                 blocker: true,
                 ..Default::default()
             },
-            other => panic!("unknown scene {other}"),
+            other => match pbgi::exact::opening(other) {
+                Some(spec) => spec,
+                None => panic!("unknown scene {other}"),
+            },
         };
         let mut scene = Scene::room(&spec);
         if name == "bounce" {
             scene = scene.without_emitter();
+        }
+        if dark {
+            scene = scene.dark_inside();
         }
         let mut probes = scene.probes(offset);
         if !class.is_empty() {
@@ -155,6 +173,7 @@ fn main() {
                         resolution: n,
                         lanes,
                         scheme: Scheme::Packet,
+                        sky: scene.sky as f32,
                     };
                     let cell = |q: Quantity, exact: &[f64]| {
                         let (v, _) = gather(&tree, &probes, q, &g).expect("gather");

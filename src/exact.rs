@@ -12,14 +12,25 @@
 //! shadow on the walls is subtracted exactly (the faces of a convex body
 //! that face a point have disjoint cones, so their parts add up).
 //!
+//! Openings: the walls may have a thickness (an outer shell, facing out,
+//! lit as a sunlit building is: none of it is seen from inside), a window
+//! in the right wall (a tunnel through the wall: four jambs, and the sky
+//! beyond), a uniform sky outside and a sunlit patch on the floor. From
+//! inside the room, what lies beyond the wall is seen only through the
+//! window's inner aperture, and a ray entering the (convex) tunnel leaves it
+//! through exactly one jamb or the outer aperture: each part is its
+//! polygon clipped to the cone of the inner aperture, and the parts add up.
+//!
 //! Gathering ([`gather`]) uses only the library's public API: the same
 //! traversal and microbuffer pipelines a renderer runs.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3};
 
 use crate::brdf::GlossyLobe;
+use crate::environment::Environment;
 use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_packet};
 use crate::polygon::{clip, projected_solid_angle};
 use crate::rng::Rng;
@@ -41,12 +52,24 @@ pub struct Face {
     pub radiance: Vec<Option<f64>>,
     /// Whether each cell belongs to the light.
     pub emitter: Vec<bool>,
-    /// Part of the occluding slab (may hide room cells), not of the room.
-    pub blocker: bool,
+    /// What the face belongs to, which says how a receiver inside sees it.
+    pub part: Part,
+}
+
+/// What a [`Face`] belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// A wall of the convex room (inward): seen wherever it faces a receiver.
+    Room,
+    /// The occluding slab (outward): may hide room cells.
+    Blocker,
+    /// Beyond the room's walls (a window's jambs, the outer shell): seen
+    /// from inside only through the window's inner aperture.
+    Beyond,
 }
 
 impl Face {
-    fn new(origin: DVec3, e1: DVec3, e2: DVec3, cell: f64, blocker: bool) -> Face {
+    fn new(origin: DVec3, e1: DVec3, e2: DVec3, cell: f64, part: Part) -> Face {
         let cells = [
             (e1.length() / cell).round().max(1.0) as usize,
             (e2.length() / cell).round().max(1.0) as usize,
@@ -59,7 +82,7 @@ impl Face {
             cells,
             radiance: vec![Some(0.0); count],
             emitter: vec![false; count],
-            blocker,
+            part,
         }
     }
 
@@ -88,7 +111,28 @@ pub struct RoomSpec {
     pub open_ceiling: bool,
     /// Add a slab under the light, an occluder.
     pub blocker: bool,
+    /// The walls' thickness: 0 is a single sheet; more adds an outer shell
+    /// (facing out) that far out, and the window's four jambs.
+    pub wall: f64,
+    /// A window [`WINDOW`] in the right wall (`x = 1`).
+    pub window: bool,
+    /// The uniform sky's radiance outside (0: black).
+    pub sky: f64,
+    /// The outer shell's radiance (a smooth field about this value; the
+    /// roof twice as bright, as under a high sun), and the jambs'.
+    pub outside: f64,
+    /// The radiance of a sunlit patch on the floor ([`SUN_PATCH`]); 0 for none.
+    pub sun_patch: f64,
 }
+
+/// The window in the right wall (`x = 1`): `y` from `[0]` to `[1]`, `z`
+/// from `[2]` to `[3]`, on cell boundaries for `cells_per_unit` 8 (5×5 cells).
+pub const WINDOW: [f64; 4] = [-0.25, 0.375, -0.375, 0.25];
+
+/// The sunlit patch on the floor: `x` from `[0]` to `[1]`, `z` from `[2]`
+/// to `[3]` (4×3 cells for `cells_per_unit` 8), where sun through the
+/// window would fall.
+pub const SUN_PATCH: [f64; 4] = [0.25, 0.75, -0.375, 0.0];
 
 impl Default for RoomSpec {
     fn default() -> Self {
@@ -97,15 +141,62 @@ impl Default for RoomSpec {
             light: 200.0,
             open_ceiling: false,
             blocker: false,
+            wall: 0.0,
+            window: false,
+            sky: 0.0,
+            outside: 0.0,
+            sun_patch: 0.0,
         }
     }
+}
+
+/// The rooms with openings, by name: `window` (a window in a single sheet
+/// under a uniform sky), `sunroom` (the window through walls 0.075 thick,
+/// about 15 cm of a 4 m room, with a sunlit patch on the floor, the sky and
+/// the outside lit), `shell` and `thin-shell` (closed walls 0.075 and 0.02
+/// thick under the sky, the outside lit: none of the outside's light is
+/// seen inside). None has the ceiling light: the walls' own bounce light,
+/// the sky and the sun patch light the room.
+pub fn opening(name: &str) -> Option<RoomSpec> {
+    let base = RoomSpec {
+        light: 0.0,
+        sky: 2.0,
+        ..Default::default()
+    };
+    Some(match name {
+        "window" => RoomSpec { window: true, ..base },
+        "sunroom" => RoomSpec {
+            window: true,
+            wall: 0.075,
+            outside: 3.0,
+            sun_patch: 10.0,
+            ..base
+        },
+        "shell" => RoomSpec {
+            wall: 0.075,
+            outside: 3.0,
+            ..base
+        },
+        "thin-shell" => RoomSpec {
+            wall: 0.02,
+            outside: 3.0,
+            ..base
+        },
+        _ => return None,
+    })
 }
 
 /// A scene of faces with exact irradiance, occlusion and glossy reflection.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    /// The room's walls (inward) and the slab's faces (outward).
+    /// The room's walls (inward), the slab's faces (outward), the jambs
+    /// and the outer shell.
     pub faces: Vec<Face>,
+    /// The uniform sky's radiance (0: black).
+    pub sky: f64,
+    /// The window's inner and outer apertures (counter-clockwise seen from
+    /// inside), if there is one.
+    pub window: Option<[[DVec3; 4]; 2]>,
 }
 
 /// A receiver with the direction its glossy reflection is seen from.
@@ -144,8 +235,61 @@ impl Scene {
             if k == 1 && spec.open_ceiling {
                 continue;
             }
-            faces.push(Face::new(o, e1, e2, cell, false));
+            faces.push(Face::new(o, e1, e2, cell, Part::Room));
             bases.push(base);
+        }
+        let t = spec.wall.max(0.0);
+        let [y0, y1, z0, z1] = WINDOW;
+        let window = spec.window.then(|| {
+            let at = |x: f64| [v(x, y0, z0), v(x, y1, z0), v(x, y1, z1), v(x, y0, z1)];
+            [at(1.0), at(1.0 + t)]
+        });
+        if t > 0.0 {
+            // The outer shell, facing out: the box [−1 − t, 1 + t]³, its
+            // right face in four pieces around the window.
+            let (lo, s) = (-1.0 - t, 2.0 + 2.0 * t);
+            let (ex, ey, ez) = (v(s, 0.0, 0.0), v(0.0, s, 0.0), v(0.0, 0.0, s));
+            let o = v(lo, lo, lo);
+            let out = spec.outside;
+            for (o, e1, e2, base) in [
+                (o, ex, ez, out),
+                (v(lo, -lo, lo), ez, ex, 2.0 * out),
+                (o, ey, ex, out),
+                (v(lo, lo, -lo), ex, ey, out),
+                (o, ez, ey, out),
+            ] {
+                faces.push(Face::new(o, e1, e2, cell, Part::Beyond));
+                bases.push(base);
+            }
+            let x = -lo;
+            // (y, then z: facing +x.)
+            let pieces = if spec.window {
+                vec![
+                    (v(x, lo, lo), v(0.0, y0 - lo, 0.0), v(0.0, 0.0, s)),
+                    (v(x, y1, lo), v(0.0, -lo - y1, 0.0), v(0.0, 0.0, s)),
+                    (v(x, y0, lo), v(0.0, y1 - y0, 0.0), v(0.0, 0.0, z0 - lo)),
+                    (v(x, y0, z1), v(0.0, y1 - y0, 0.0), v(0.0, 0.0, -lo - z1)),
+                ]
+            } else {
+                vec![(v(x, lo, lo), v(0.0, s, 0.0), v(0.0, 0.0, s))]
+            };
+            for (o, e1, e2) in pieces {
+                faces.push(Face::new(o, e1, e2, cell, Part::Beyond));
+                bases.push(out);
+            }
+            if spec.window {
+                // The jambs, facing into the tunnel: sill, head, the two sides.
+                let (dx, dy, dz) = (v(t, 0.0, 0.0), v(0.0, y1 - y0, 0.0), v(0.0, 0.0, z1 - z0));
+                for (o, e1, e2) in [
+                    (v(1.0, y0, z0), dz, dx),
+                    (v(1.0, y1, z0), dx, dz),
+                    (v(1.0, y0, z0), dx, dy),
+                    (v(1.0, y0, z1), dy, dx),
+                ] {
+                    faces.push(Face::new(o, e1, e2, cell, Part::Beyond));
+                    bases.push(0.8 * out.max(0.5));
+                }
+            }
         }
         if spec.blocker {
             // The slab [−0.37, 0.43] × [0.1, 0.2] × [−0.45, 0.17], faces outward
@@ -162,7 +306,7 @@ impl Scene {
                 (lo, ez, ey, 0.4),
                 (v(hi.x, lo.y, lo.z), ey, ez, 0.4),
             ] {
-                faces.push(Face::new(o, e1, e2, cell, true));
+                faces.push(Face::new(o, e1, e2, cell, Part::Blocker));
                 bases.push(base);
             }
         }
@@ -174,17 +318,45 @@ impl Scene {
                     let m = (c[0] + c[2]) * 0.5;
                     // Smooth bounce light, varying per cell so that clusters average it.
                     let l = b * (1.0 + 0.3 * (2.1 * m.x + 1.3 * m.y + 0.7 * m.z + phase).sin());
-                    let light = !f.blocker
+                    let room = f.part == Part::Room;
+                    let light = room
                         && spec.light > 0.0
                         && (m.y - 1.0).abs() < 1e-9
                         && m.x.abs() < 0.125
                         && m.z.abs() < 0.125;
-                    f.radiance[j * f.cells[0] + i] = Some(if light { spec.light } else { l });
-                    f.emitter[j * f.cells[0] + i] = light;
+                    let inside = |x: f64, [a, b, c, d]: [f64; 4], y: f64| a < x && x < b && c < y && y < d;
+                    let hole = room && spec.window && (m.x - 1.0).abs() < 1e-9 && inside(m.y, WINDOW, m.z);
+                    let sun = room
+                        && spec.sun_patch > 0.0
+                        && (m.y + 1.0).abs() < 1e-9
+                        && inside(m.x, SUN_PATCH, m.z);
+                    let c = j * f.cells[0] + i;
+                    f.radiance[c] = match (hole, light, sun) {
+                        (true, _, _) => None,
+                        (_, true, _) => Some(spec.light),
+                        (_, _, true) => Some(spec.sun_patch),
+                        _ => Some(l),
+                    };
+                    f.emitter[c] = light;
                 }
             }
         }
-        Scene { faces }
+        Scene {
+            faces,
+            sky: spec.sky.max(0.0),
+            window,
+        }
+    }
+
+    /// The same scene with the room's own walls (and the slab) black: what
+    /// lights it comes from beyond the walls (the sky and the jambs through
+    /// the window, nothing of the outer shell).
+    pub fn dark_inside(&self) -> Scene {
+        let mut s = self.clone();
+        for f in s.faces.iter_mut().filter(|f| f.part != Part::Beyond) {
+            f.radiance.iter_mut().flatten().for_each(|l| *l = 0.0);
+        }
+        s
     }
 
     /// The same scene with the light's cells cut out (holes: they neither
@@ -243,7 +415,10 @@ impl Scene {
     /// a 6×6 grid of face coordinates from 0.005 (0.01 from the edge; in a
     /// corner two walls are seen edge-on) over mid-wall to 0.96, `offset`
     /// off the surface along the normal (the renderer moves camera hits
-    /// 10⁻⁵ of the scene size off their surface).
+    /// 10⁻⁵ of the scene size off their surface). With a window, those in
+    /// it are left out, those within 0.1 of it are of class `"window"`, and
+    /// twelve more stand near it: 0.02 and 0.06 off the middle of each of
+    /// its edges on the wall, and four on the floor below and before it.
     pub fn probes(&self, offset: f32) -> Vec<Probe> {
         let st = [0.005, 0.04, 0.2, 0.45, 0.7, 0.96];
         let near = |x: f64| !(0.1..=0.9).contains(&x);
@@ -254,69 +429,124 @@ impl Scene {
             ("right", v(1.0, -1.0, -1.0), v(0.0, 0.0, 2.0), v(0.0, 2.0, 0.0)),
             ("ceiling", v(-1.0, 1.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0)),
         ];
+        let [y0, y1, z0, z1] = WINDOW;
+        // How far a point of the right wall lies outside the window (< 0: in it).
+        let off_window = |q: DVec3| (y0 - q.y).max(q.y - y1).max(z0 - q.z).max(q.z - z1);
         let mut out = Vec::new();
+        let mut push = |name, q: DVec3, n: Vec3, class| {
+            let p = q.as_vec3() + n * offset;
+            out.push(Probe {
+                position: p,
+                normal: n,
+                wo: (-p).normalize(),
+                face: name,
+                class,
+            });
+        };
         for (name, o, e1, e2) in walls {
             let n = e1.cross(e2).normalize().as_vec3();
             for &t in &st {
                 for &s in &st {
-                    let p = (o + e1 * s + e2 * t).as_vec3() + n * offset;
-                    let class = ["mid", "edge", "corner"][usize::from(near(s)) + usize::from(near(t))];
-                    out.push(Probe {
-                        position: p,
-                        normal: n,
-                        wo: (-p).normalize(),
-                        face: name,
-                        class,
-                    });
+                    let q = o + e1 * s + e2 * t;
+                    let mut class = ["mid", "edge", "corner"][usize::from(near(s)) + usize::from(near(t))];
+                    if self.window.is_some() && name == "right" {
+                        match off_window(q) {
+                            d if d <= 0.0 => continue,
+                            d if d < 0.1 => class = "window",
+                            _ => {}
+                        }
+                    }
+                    push(name, q, n, class);
                 }
+            }
+        }
+        if self.window.is_some() {
+            let (ym, zm) = ((y0 + y1) * 0.5, (z0 + z1) * 0.5);
+            for d in [0.02, 0.06] {
+                for q in [
+                    v(1.0, y0 - d, zm),
+                    v(1.0, y1 + d, zm),
+                    v(1.0, ym, z0 - d),
+                    v(1.0, ym, z1 + d),
+                ] {
+                    push("right", q, Vec3::NEG_X, "window");
+                }
+            }
+            for x in [0.98, 0.9, 0.7, 0.4] {
+                push("floor", v(x, -1.0, zm + 0.03), Vec3::Y, "window");
             }
         }
         out
     }
 
     /// Exact irradiance (`∫ L cosθ dω`) and occlusion (`∫ cosθ dω / π` over
-    /// the directions some cell covers) at `p` facing `n`.
+    /// the directions some cell covers) at `p` (inside the room) facing `n`;
+    /// the sky adds to irradiance, not to occlusion.
     pub fn exact(&self, p: Vec3, n: Vec3) -> (f64, f64) {
         let (p, n) = (p.as_dvec3(), n.as_dvec3());
-        // Cones (edge planes through p) of the slab faces p sees.
-        let mut cones: Vec<[DVec3; 4]> = Vec::new();
-        for f in self
-            .faces
-            .iter()
-            .filter(|f| f.blocker && (p - f.origin).dot(f.normal()) > 1e-7)
-        {
-            let c = [f.origin, f.origin + f.e1, f.origin + f.e1 + f.e2, f.origin + f.e2].map(|q| q - p);
+        // The cone (edge planes through p, inward) of a convex polygon.
+        let cone = |c: [DVec3; 4]| -> [DVec3; 4] {
+            let c = c.map(|q| q - p);
             let mid = (c[0] + c[2]) * 0.5;
-            cones.push(std::array::from_fn(|k| {
+            std::array::from_fn(|k| {
                 let m = c[k].cross(c[(k + 1) % 4]);
                 if m.dot(mid) < 0.0 { -m } else { m }
-            }));
-        }
+            })
+        };
+        let within =
+            |poly: Vec<DVec3>, cone: &[DVec3; 4]| cone.iter().fold(poly, |part, m| clip(&part, |q| m.dot(q)));
+        // Cones of the slab faces p sees.
+        let cones: Vec<[DVec3; 4]> = self
+            .faces
+            .iter()
+            .filter(|f| f.part == Part::Blocker && (p - f.origin).dot(f.normal()) > 1e-7)
+            .map(|f| cone([f.origin, f.origin + f.e1, f.origin + f.e1 + f.e2, f.origin + f.e2]))
+            .collect();
+        // The projected solid angle of `poly` (relative to p) less what the
+        // slab hides of it.
+        let seen = |poly: Vec<DVec3>| {
+            let mut w = projected_solid_angle(&poly, n);
+            for c in &cones {
+                w -= projected_solid_angle(&within(poly.clone(), c), n);
+            }
+            w
+        };
+        let aperture = self.window.map(|[inner, _]| cone(inner));
         let (mut e, mut covered) = (0.0, 0.0);
         for f in &self.faces {
             if (p - f.origin).dot(f.normal()) <= 0.0 {
                 continue; // p is behind it (or on its plane)
             }
+            let through = match (f.part, aperture) {
+                (Part::Beyond, None) => continue,
+                (Part::Beyond, Some(a)) => Some(a),
+                _ => None,
+            };
             for j in 0..f.cells[1] {
                 for i in 0..f.cells[0] {
                     let Some(l) = f.radiance[j * f.cells[0] + i] else {
                         continue;
                     };
-                    let poly = clip(&f.cell(i, j).map(|q| q - p), |q| n.dot(q));
-                    let mut w = projected_solid_angle(&poly, n);
-                    if !f.blocker {
-                        for cone in &cones {
-                            let mut part = poly.clone();
-                            for m in cone {
-                                part = clip(&part, |q| m.dot(q));
-                            }
-                            w -= projected_solid_angle(&part, n);
-                        }
+                    let mut poly = clip(&f.cell(i, j).map(|q| q - p), |q| n.dot(q));
+                    if let Some(a) = &through {
+                        poly = within(poly, a);
                     }
+                    let w = if f.part == Part::Blocker {
+                        projected_solid_angle(&poly, n)
+                    } else {
+                        seen(poly)
+                    };
                     e += l * w;
                     covered += w;
                 }
             }
+        }
+        if let (Some([inner, outer]), Some(a)) = (self.window, &aperture)
+            && self.sky > 0.0
+            && (p - inner[0]).dot(DVec3::X) < 0.0
+        {
+            let poly = clip(&outer.map(|q| q - p), |q| n.dot(q));
+            e += self.sky * seen(within(poly, a));
         }
         (e, covered / std::f64::consts::PI)
     }
@@ -348,10 +578,10 @@ impl Scene {
         best
     }
 
-    /// Radiance seen from `p` along unit `d`; 0 where the ray leaves.
+    /// Radiance seen from `p` along unit `d`; the sky's where the ray leaves.
     pub fn radiance(&self, p: DVec3, d: DVec3) -> f64 {
         self.hit(p, d)
-            .map_or(0.0, |(k, c, _)| self.faces[k].radiance[c].unwrap_or(0.0))
+            .map_or(self.sky, |(k, c, _)| self.faces[k].radiance[c].unwrap_or(0.0))
     }
 
     /// Glossy reflection `∫ f_s(ωi, wo) L(ωi) cosθi dωi` of `lobe` at `p`
@@ -375,11 +605,12 @@ impl Scene {
                 let phi = std::f64::consts::TAU * (j as f64 + 0.5) / m as f64;
                 let wi = t * (sin * phi.cos()) + b * (sin * phi.sin()) + r * cos;
                 let c = wi.dot(n);
-                if c > 0.0
-                    && let Some((k, cell, _)) = self.hit(p, wi)
-                    && !self.faces[k].emitter[cell]
-                {
-                    sum += c * self.faces[k].radiance[cell].unwrap_or(0.0);
+                if c > 0.0 {
+                    sum += c * match self.hit(p, wi) {
+                        Some((k, cell, _)) if self.faces[k].emitter[cell] => 0.0,
+                        Some((k, cell, _)) => self.faces[k].radiance[cell].unwrap_or(0.0),
+                        None => self.sky,
+                    };
                 }
             }
         }
@@ -439,6 +670,8 @@ pub struct Gather {
     pub lanes: bool,
     /// Traversal scheme.
     pub scheme: Scheme,
+    /// The uniform sky the open pixels see (the scene's [`Scene::sky`]).
+    pub sky: f32,
 }
 
 /// Gathers `what` at every probe, on this thread; returns the values and
@@ -458,7 +691,10 @@ pub fn gather(
         },
     )?;
     let receivers = Receiver::from_pairs(probes.iter().map(|p| (p.position, p.normal)))?;
-    let mut bufs = vec![MicroBuffer::new(g.resolution)?; LANES];
+    let sky = (g.sky > 0.0)
+        .then(|| Environment::uniform(Vec3::splat(g.sky)).map(Arc::new))
+        .transpose()?;
+    let mut bufs = vec![MicroBuffer::new(g.resolution)?.with_environment(sky); LANES];
     let mut cut = PacketCut::new(tree);
     let mut out = Vec::with_capacity(probes.len());
     let mut values = [Vec3::ZERO; LANES];
@@ -557,6 +793,58 @@ mod tests {
             "{} vs {exact_sky}",
             1.0 - occ
         );
+    }
+
+    #[test]
+    fn through_a_window_lambert_matches_quadrature() {
+        // The jambs, the sky and the sunlit patch seen through the window's
+        // inner aperture, clipped, against rays (which know nothing of
+        // apertures: they pass the hole and meet a jamb or leave).
+        let flat = GlossyLobe {
+            specular: glam::Vec3::ONE,
+            roughness: 1.0,
+        };
+        for name in ["window", "sunroom"] {
+            let s = Scene::room(&opening(name).expect("a scene"));
+            let probes = s.probes(2e-5);
+            let mut sky = 0;
+            for p in probes
+                .iter()
+                .filter(|p| p.class == "window" || p.face == "floor")
+                .step_by(3)
+            {
+                let (e, _) = s.exact(p.position, p.normal);
+                let q = s.glossy(p.position, p.normal, p.normal, &flat, 600) * std::f64::consts::PI;
+                assert!((q / e - 1.0).abs() < 5e-3, "{name} {p:?}: {e} vs {q}");
+                let dark = Scene {
+                    faces: Vec::new(),
+                    ..s.clone()
+                };
+                sky += usize::from(dark.glossy(p.position, p.normal, p.normal, &flat, 8) > 0.0);
+            }
+            assert!(sky >= 5, "{name}: too few receivers see the sky ({sky})");
+        }
+    }
+
+    #[test]
+    fn a_thick_walled_room_sees_none_of_its_outside() {
+        for name in ["shell", "thin-shell", "sunroom"] {
+            let lit = Scene::room(&opening(name).expect("a scene"));
+            let mut dark = lit.dark_inside();
+            dark.sky = 0.0;
+            for p in dark.probes(2e-5) {
+                let (e, occ) = dark.exact(p.position, p.normal);
+                if dark.window.is_none() {
+                    assert_eq!(e, 0.0, "{name} {p:?}");
+                    assert!((occ - 1.0).abs() < 1e-9, "{name} {p:?}: {occ}");
+                }
+                // Only the jambs, through the window.
+                assert!(
+                    e >= 0.0 && e < 0.8 * 3.0 * 1.3 * std::f64::consts::PI,
+                    "{name} {p:?}: {e}"
+                );
+            }
+        }
     }
 
     #[test]
