@@ -395,7 +395,7 @@ fn sky_through_a_window_converges_to_the_sky_times_the_window_s_projected_solid_
     // walls). A single sheet, and a wall 0.075 thick with its jambs.
     // Converges at N 24: 13.0 / 7.0 / 2.9 / 0.29 % and 316 / 73 / 20 /
     // 0.40 %. Not yet at the defaults, for two reasons measured in
-    // docs/lab/open-scenes.md: a coarse cluster of the wall beside the
+    // docs/lab/openings-exact.md: a coarse cluster of the wall beside the
     // opening is drawn as a disk of its area, which covers part of the
     // opening; and a cluster holding both faces of the thick wall shows
     // its lit outside inside the room.
