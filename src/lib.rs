@@ -63,9 +63,10 @@
 //!   the input's own (on a unit box: 0.005 % RMS at 10⁴, 0.8 % at 10⁶, 2.5 %
 //!   at 10⁷, while the input's rounding alone costs 0.06 %, 1 % and tens of
 //!   %). Keep a scene's coordinates small relative to its detail, or centre it.
-//! * **Depth**: the median split gives depth ⌈log₂ n⌉ whatever the positions,
-//!   at most [`MAX_DEPTH`](tree::MAX_DEPTH) = 30; the traversal stacks are
-//!   sized for it.
+//! * **Depth**: the median split gives depth ⌈log₂ n⌉ whatever the positions;
+//!   splits by orientation (a hollow solid's two sides) may add up to
+//!   [`EXTRA_DEPTH`](tree::EXTRA_DEPTH) = 4 levels, never past
+//!   [`MAX_DEPTH`](tree::MAX_DEPTH) = 30; the traversal stacks are sized for it.
 //! * **Ω**: any finite Ω ≥ 0 is accepted; from Ω ≥ π on, the node test
 //!   `π R² < Ω d²` may splat a node whose sphere contains the receiver, and
 //!   the estimate degrades (bounded, not accurate).

@@ -433,3 +433,58 @@ fn rooms_with_openings_converge_as_the_solid_angle_shrinks_and_the_resolution_gr
         assert!(by_n[3].rel_rmse <= 0.01, "{name}, finest: {by_n:?}");
     }
 }
+
+#[test]
+fn a_closed_box_with_thick_walls_lets_nothing_of_its_outside_in() {
+    // Walls 0.075 and 0.02 thick, the outside lit (the roof twice as
+    // bright), the room itself and the sky black: nothing arrives inside,
+    // at any receiver (corners too), at any Ω or N, over jittered surfels
+    // or a grid. The tree once grouped a wall's inside and outside at the
+    // room's edges; such a cluster, drawn as a round cone with its mean
+    // normal cancelled, covered too little and showed its sunlit outside
+    // (and, under a sky, the sky: mid-wall +15 % at the defaults). The sky
+    // is left out here because the API's gather has no near field: from a
+    // corner the next wall, seen edge-on, leaves gaps at N 14 (the
+    // renderer casts rays there). Not yet exact (measured, grid and
+    // jittered): at Ω 0.5 up to 43 receivers near the edges see up to
+    // 0.08 (the room's own light is about 1.4), and at Ω 0.15, N 24 one of
+    // the thin shell's corners 0.0008; clusters holding one wall's inside
+    // and the next wall's outside (no two of their faces back to back)
+    // remain there.
+    for (name, omegas) in [("shell", &[0.15, 0.05][..]), ("thin-shell", &[0.05][..])] {
+        let mut scene = opening(name).dark_inside();
+        scene.sky = 0.0;
+        let probes = every(&scene);
+        for seed in [None, Some(7)] {
+            let tree = scene.tree(2, seed).expect("valid surfels");
+            for &omega in omegas {
+                for n in [14, 24] {
+                    let g = Gather {
+                        max_solid_angle: omega,
+                        light_offset: 0.0,
+                        resolution: n,
+                        lanes: true,
+                        scheme: Scheme::Packet,
+                        sky: scene.sky as f32,
+                    };
+                    let (v, _) = gather(&tree, &probes, Quantity::Irradiance, &g).expect("gather");
+                    let lit: Vec<(&str, &str, f64)> = probes
+                        .iter()
+                        .zip(&v)
+                        .filter(|(_, e)| **e != 0.0)
+                        .map(|(p, &e)| (p.face, p.class, e))
+                        .collect();
+                    assert!(lit.is_empty(), "{name} {seed:?} Ω {omega} N {n}: {lit:?}");
+                }
+            }
+        }
+    }
+    // Lit inside as well, mid-wall at the render's defaults (grid, 4 surfels
+    // per cell side): the thick-walled room with the window, and the closed one.
+    let (omega, n) = defaults();
+    for name in ["sunroom", "shell"] {
+        let scene = opening(name);
+        let e = grid_error(&scene, &mid(&scene), 4, Quantity::Irradiance, omega, n);
+        assert!(e.rel_rmse <= 0.015 && e.bias.abs() <= 0.015, "{name}: {e:?}");
+    }
+}

@@ -511,7 +511,8 @@ fn collinear_and_coplanar_clouds() {
 }
 
 /// The depth bound. The median split puts ⌊n/2⌋ surfels left and ⌈n/2⌉
-/// right whatever the positions, so the depth is exactly ⌈log₂ n⌉ — chains
+/// right whatever the positions, so a cloud facing one way (no hollow
+/// solid's two sides to part by orientation) is exactly ⌈log₂ n⌉ deep — chains
 /// that would make a spatial split degenerate (positions 2^i, 1.001^i,
 /// alternating in sign, reversed) included — hence at most
 /// `MAX_DEPTH` = 30 for the largest cloud `PointCloud::MAX_SURFELS` = 2³⁰.

@@ -18,9 +18,10 @@
 
 use glam::Vec3;
 
-use crate::points::{PointCloud, Surfel};
+use crate::points::PointCloud;
 
 mod bound;
+mod build;
 pub(crate) use bound::FacetPlanes;
 mod check;
 pub mod file;
@@ -35,6 +36,12 @@ pub(crate) const LEAF_BIT: u32 = 1 << 31;
 
 /// Bound on the tree depth (levels below the root): `⌈log₂ MAX_SURFELS⌉`.
 pub const MAX_DEPTH: usize = 30;
+
+/// Levels the split by orientation (a hollow solid's two sides, which need
+/// not hold half the surfels each) may add to the median split's
+/// `⌈log₂ n⌉`: a tree of `n` surfels is at most `⌈log₂ n⌉ + EXTRA_DEPTH`
+/// deep, and never deeper than [`MAX_DEPTH`].
+pub const EXTRA_DEPTH: usize = 4;
 
 /// Index of a field in [`PairRecord::f`].
 pub(crate) mod field {
@@ -298,9 +305,6 @@ struct BuildNode {
     depth: u32,
 }
 
-/// Subtrees smaller than this are built on the calling thread.
-const PARALLEL_CUTOFF: usize = 4096;
-
 impl Tree {
     /// Builds the hierarchy. `O(n log n)`, deterministic, parallel over subtrees.
     pub fn build(cloud: &PointCloud) -> Tree {
@@ -312,7 +316,8 @@ impl Tree {
         let mut order: Vec<u32> = (0..n as u32).collect();
         let mut built = vec![BuildNode::default(); 2 * n - 1];
         let (root, below) = built.split_first_mut().expect("n > 0");
-        *root = build_subtree(surfels, &mut order, below, 1);
+        let budget = (build::ceil_log2(n) + EXTRA_DEPTH).min(MAX_DEPTH);
+        *root = build::build_subtree(surfels, &mut order, below, 1, budget);
 
         let mut tree = Tree {
             depth: root.depth,
@@ -511,70 +516,4 @@ impl Tree {
         }
         parent
     }
-}
-
-/// Builds the subtree over `order` (surfel indices), returns its root and fills
-/// `below` (exactly `2·len − 2` slots) with its descendants; `base` is the node
-/// index of `below[0]`. Layout of `below`: both children, then the left child's
-/// descendants, then the right child's.
-fn build_subtree(surfels: &[Surfel], order: &mut [u32], below: &mut [BuildNode], base: u32) -> BuildNode {
-    debug_assert_eq!(below.len(), 2 * order.len() - 2);
-    let (lo, hi) = position_bounds(surfels, order);
-    let mut node = bound::bound_node(surfels, order, lo, hi);
-    if order.len() == 1 {
-        node.child = LEAF_BIT | order[0];
-        return node;
-    }
-
-    // Median split along the widest axis; the index breaks ties, so duplicate
-    // positions still split in two halves.
-    let ext = hi - lo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z {
-        0
-    } else if ext.y >= ext.z {
-        1
-    } else {
-        2
-    };
-    let len = order.len();
-    let mid = len / 2;
-    order.select_nth_unstable_by(mid, |&i, &j| {
-        let (a, b) = (
-            surfels[i as usize].position[axis],
-            surfels[j as usize].position[axis],
-        );
-        a.total_cmp(&b).then(i.cmp(&j))
-    });
-    let (left_order, right_order) = order.split_at_mut(mid);
-    let (pair, rest) = below.split_at_mut(2);
-    let (left_below, right_below) = rest.split_at_mut(2 * left_order.len() - 2);
-    let left_base = base + 2;
-    let right_base = left_base + left_below.len() as u32;
-    let (l, r) = if len >= PARALLEL_CUTOFF {
-        rayon::join(
-            || build_subtree(surfels, left_order, left_below, left_base),
-            || build_subtree(surfels, right_order, right_below, right_base),
-        )
-    } else {
-        (
-            build_subtree(surfels, left_order, left_below, left_base),
-            build_subtree(surfels, right_order, right_below, right_base),
-        )
-    };
-    node.depth = 1 + l.depth.max(r.depth);
-    pair[0] = l;
-    pair[1] = r;
-    node.child = base;
-    node
-}
-
-fn position_bounds(surfels: &[Surfel], order: &[u32]) -> (Vec3, Vec3) {
-    let mut lo = Vec3::INFINITY;
-    let mut hi = Vec3::NEG_INFINITY;
-    for &i in order {
-        let p = surfels[i as usize].position;
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    (lo, hi)
 }
