@@ -393,23 +393,24 @@ fn sky_through_a_window_converges_to_the_sky_times_the_window_s_projected_solid_
     // (clipped to the receiver's horizon) times the sky's radiance, at the
     // mid-wall receivers, over surfels on a grid (the cloud is exactly the
     // walls). A single sheet, and a wall 0.075 thick with its jambs.
-    // Converges at N 24: 13.0 / 7.0 / 2.9 / 0.29 % and 316 / 73 / 20 /
-    // 0.40 %. Not yet at the defaults, for two reasons measured in
-    // docs/lab/openings-exact.md: a coarse cluster of the wall beside the
-    // opening is drawn as a disk of its area, which covers part of the
-    // opening; and a cluster holding both faces of the thick wall shows
-    // its lit outside inside the room.
+    // The sky is what the walls leave open, a small difference of large
+    // sums: splats drawn at their far-field solid angle covered 1 % of the
+    // hemisphere too much, and the sky came out 24–30 % short at the
+    // defaults. Converges at N 24 (Ω 0.15 / 0.05 / 0.01 / 0.001): 7.95 /
+    // 1.66 / 0.53 / 0.33 % and 8.43 / 2.22 / 0.71 / 0.75 %. From Ω 0.01 on
+    // the cut is as good as N 24 resolves (the sunroom's last step is
+    // noise, 0.71 against 0.75 %): it falls to Ω 0.01 and stays within 1 %.
     for name in ["window", "sunroom"] {
         let scene = opening(name).dark_inside();
         let probes = mid(&scene);
-        let by_omega: Vec<Stats> = [0.15, 0.05, 0.01, 0.001]
-            .iter()
-            .map(|&o| grid_error(&scene, &probes, 8, Quantity::Irradiance, o, 24))
-            .collect();
-        for w in by_omega.windows(2) {
+        let at = |o| grid_error(&scene, &probes, 8, Quantity::Irradiance, o, 24);
+        let by_omega: Vec<Stats> = [0.15, 0.05, 0.01, 0.001].iter().map(|&o| at(o)).collect();
+        for w in by_omega[..3].windows(2) {
             assert!(w[0].rel_rmse > w[1].rel_rmse, "{name}, Ω: {by_omega:?}");
         }
-        assert!(by_omega[3].rel_rmse <= 0.01, "{name}, finest: {by_omega:?}");
+        for s in &by_omega[2..] {
+            assert!(s.rel_rmse <= 0.01, "{name}, finest: {by_omega:?}");
+        }
     }
 }
 
@@ -422,10 +423,17 @@ fn rooms_with_openings_converge_as_the_solid_angle_shrinks_and_the_resolution_gr
         let scene = opening(name);
         let probes = every(&scene);
         let at = |omega, n| grid_error(&scene, &probes, 8, Quantity::Irradiance, omega, n);
+        // From Ω 0.01 on the cut is as good as N 48 resolves (the window's
+        // 1.089 against 1.090 % at Ω 0.001): the N sweep below goes on.
         let by_omega: Vec<Stats> = [0.15, 0.01, 0.001].iter().map(|&o| at(o, 48)).collect();
-        for w in by_omega.windows(2) {
-            assert!(w[0].rel_rmse > w[1].rel_rmse, "{name}, Ω: {by_omega:?}");
-        }
+        assert!(
+            by_omega[0].rel_rmse > by_omega[1].rel_rmse,
+            "{name}, Ω: {by_omega:?}"
+        );
+        assert!(
+            by_omega[2].rel_rmse <= by_omega[1].rel_rmse * 1.01,
+            "{name}, Ω: {by_omega:?}"
+        );
         let by_n: Vec<Stats> = [14, 24, 48, 96].iter().map(|&n| at(0.001, n)).collect();
         for w in by_n.windows(2) {
             assert!(w[0].rel_rmse > w[1].rel_rmse, "{name}, N: {by_n:?}");
@@ -486,5 +494,23 @@ fn a_closed_box_with_thick_walls_lets_nothing_of_its_outside_in() {
         let scene = opening(name);
         let e = grid_error(&scene, &mid(&scene), 4, Quantity::Irradiance, omega, n);
         assert!(e.rel_rmse <= 0.015 && e.bias.abs() <= 0.015, "{name}: {e:?}");
+    }
+}
+
+#[test]
+fn a_window_s_sky_does_not_depend_on_the_microbuffer_s_resolution() {
+    // The sky a receiver sees is what its cut leaves open, a small
+    // difference of large sums: each splat must add its own projected
+    // solid angle, at any N. A cone filling some pixels kept what they
+    // could not take when scaled to its area (up to 5 % of it lost, more at
+    // N 24 than at 14 or 48), and splats were drawn at their far-field
+    // solid angle, 2–5 % over their cells. Room black, mid receivers, grid
+    // k 8, Ω 0.05: the window's sky was −12.7 % at N 14 and −7.0 % at
+    // N 24 (k 4); now 1.4 / 1.3 / 1.3 % (RMSE) at N 14 / 24 / 48.
+    let scene = opening("window").dark_inside();
+    let probes = mid(&scene);
+    for n in [14, 24, 48] {
+        let e = grid_error(&scene, &probes, 8, Quantity::Irradiance, 0.05, n);
+        assert!(e.rel_rmse <= 0.02 && e.bias.abs() <= 0.02, "N {n}: {e:?}");
     }
 }

@@ -13,24 +13,50 @@ use crate::tree::{LEAF, NodeId, SplatRecord};
 
 /// Scales the cone fragments `frags[start..]` so that their
 /// `Σ coverage·∫cos` is `target` (`Ω·cosθ`); nothing when `target` is 0 (a
-/// centre below the horizon) or the cone covered no pixel. The sum is taken
-/// in fixed point, so it does not depend on the order the pixels were
-/// visited in (row by row here, tile by tile in the 16-lane draw).
+/// centre below the horizon) or the cone covered no pixel. A fragment
+/// covers at most its pixel: where scaling up fills some, the others take
+/// up what they cannot hold (up to four rounds). Filled pixels kept what
+/// they could not take, and a cone of two to four pixels across, sampled
+/// at the pixel centres under its area, lost up to 5 % of it (at N 24
+/// more than at N 14 or 48: `examples/sky_coverage`). The sums are taken in
+/// fixed point, so they do not depend on the order the pixels were visited
+/// in (row by row here, tile by tile in the 16-lane draw).
 #[inline(always)]
 pub(super) fn normalize_cone(frags: &mut Fragments, start: usize, t: &Table, target: f32) {
     if target.is_nan() || target <= 0.0 {
         return;
     }
     const ONE: f64 = (1u64 << 40) as f64;
+    let fixed = |x: f32| (x as f64 * ONE) as u64;
     let mut sum = 0u64;
     for i in start..frags.len() {
-        let cw = t.cos_weight[frags.pixel[i] as usize];
-        sum += ((frags.cover[i] * cw) as f64 * ONE) as u64;
+        sum += fixed(frags.cover[i] * t.cos_weight[frags.pixel[i] as usize]);
     }
     if sum == 0 {
         return;
     }
-    let scale = target / (sum as f64 / ONE) as f32;
+    let mut scale = target / (sum as f64 / ONE) as f32;
+    for _ in 0..4 {
+        // What the full pixels hold, and what the others would at `scale`.
+        let (mut full, mut rest) = (0u64, 0u64);
+        for i in start..frags.len() {
+            let (c, cw) = (frags.cover[i], t.cos_weight[frags.pixel[i] as usize]);
+            if c * scale >= 1.0 {
+                full += fixed(cw);
+            } else {
+                rest += fixed(c * cw);
+            }
+        }
+        let left = target - (full as f64 / ONE) as f32;
+        if full == 0 || rest == 0 || left <= 0.0 {
+            break;
+        }
+        let next = left / (rest as f64 / ONE) as f32;
+        if next <= scale {
+            break;
+        }
+        scale = next;
+    }
     for c in &mut frags.cover[start..] {
         *c = (*c * scale).min_of(1.0);
     }

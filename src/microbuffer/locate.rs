@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::simd::{F32s, Real};
-use crate::tree::{Cluster, MIXED, NodeId, SplatRecord, Tree};
+use crate::tree::{Cluster, MIXED, NodeId, PLANAR, SplatRecord, Tree};
 
 /// What splatting reads of a node, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -171,6 +171,44 @@ pub(super) fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
     V::select(zero.lt(l2) & zero.le(g) & g.lt(V::splat(f32::INFINITY)), g, zero)
 }
 
+/// A planar cluster's (or a facet's) projected solid angle `∫ cosθ_r dω`
+/// over its far-field `A·f·c/d²` (`f = −m·ω` its facing, `c = n·ω` the
+/// receiver's cosine, `ω` towards its centroid `u`), to second order in
+/// `r/d` for a disk of its area (`x = r²/d² = A/(πd²)`):
+/// `1 + x·(1 − 3f² − f·(n·m)/c)`.
+/// On the axis of a disk facing the receiver it is `1 − x`, as
+/// `πr²/(d² + r²)` is. The far field alone drew a coarse cut's planar
+/// clusters 2–5 % larger than their cells (`examples/sky_coverage`): in a
+/// room they covered about 1 % of the hemisphere too much, and a window's
+/// sky, what the walls leave open, came out 30–45 % short at the
+/// defaults. Within `[½, 3/2]`; 1 where `c` is near 0 (the cluster at the
+/// horizon, which the cone's part below it already cuts).
+#[inline(always)]
+fn near_field<V: Real>(area: V, m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
+    let zero = V::splat(0.0);
+    let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+    let l = l2.sqrt();
+    let w = [u[0] / l, u[1] / l, u[2] / l];
+    // `m` may be shorter than 1 (a facet's `A·n̄/A_node`): its length
+    // scales the area, its direction gives the facing.
+    let len = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    let unit = zero.lt(len);
+    let len1 = V::select(unit, len, V::splat(1.0));
+    let facing = -(m[0] * w[0] + m[1] * w[1] + m[2] * w[2]) / len1;
+    let nm = (m[0] * n[0] + m[1] * n[1] + m[2] * n[2]) / len1;
+    let c = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+    let x = area * len * V::splat(std::f32::consts::FRAC_1_PI) / l2;
+    let lit = V::splat(1e-3).lt(c);
+    let c = V::select(lit, c, V::splat(1.0));
+    let k = V::splat(1.0) + x * (V::splat(1.0) - V::splat(3.0) * facing * facing - facing * nm / c);
+    let k = k.max_of(V::splat(0.5)).min_of(V::splat(1.5));
+    V::select(
+        lit & unit & zero.lt(l2) & l2.lt(V::splat(f32::INFINITY)),
+        k,
+        V::splat(1.0),
+    )
+}
+
 /// Places node `s` (showing `light`) in the microbuffer of receiver `f`
 /// (`half` = `N/2`).
 ///
@@ -229,7 +267,7 @@ pub(crate) fn locate<V: Real>(
                 vy + V::splat(c[1]) * r,
                 vz + V::splat(c[2]) * r,
             ];
-            *g = transfer(m, u, n);
+            *g = transfer(m, u, n) * near_field(s.area, m, u, n);
             total = total + *g;
         }
         // Shares of what the facets send; of their projected area where
@@ -262,12 +300,17 @@ pub(crate) fn locate<V: Real>(
             zero,
         )
     };
-    // A huge node right in front of the receiver overflows the far-field
-    // estimate; it covers at most the hemisphere.
-    let omega = raw.min_of(V::splat(std::f32::consts::TAU));
     let wx = dx * f.tx + dy * f.ty + dz * f.tz;
     let wy = dx * f.bx + dy * f.by + dz * f.bz;
     let wz = dx * f.nx + dy * f.ny + dz * f.nz;
+    let raw = if light.kind == PLANAR {
+        raw * near_field(s.area, [s.nx, s.ny, s.nz], [vx, vy, vz], n)
+    } else {
+        raw
+    };
+    // A huge node right in front of the receiver overflows the far-field
+    // estimate; it covers at most the hemisphere.
+    let omega = raw.min_of(V::splat(std::f32::consts::TAU));
     let radiance = if light.shifted {
         // A cluster is drawn at its area centroid `c` (its coverage); its
         // light comes from its light centroid `l` (a mixed one's facets,

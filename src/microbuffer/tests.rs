@@ -292,8 +292,11 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
     };
     let centroid = floor.iter().map(|s| s.position).sum::<Vec3>() / floor.len() as f32;
     let covers = floor_area * g(centroid);
+    // To first order in `r/d`: the second-order term (`locate::near_field`,
+    // a disk's `A/(πd²)` times a factor of order 1) is left to it.
+    let x = floor_area / (std::f32::consts::PI * d * d);
     assert!(
-        (l.projected / covers - 1.0).abs() < 1e-4,
+        (l.projected / covers - 1.0).abs() < 2.0 * x,
         "covers {}, the floor {covers}",
         l.projected
     );
