@@ -28,15 +28,19 @@ pub(super) fn normalize_cone(frags: &mut Fragments, start: usize, t: &Table, tar
     }
     const ONE: f64 = (1u64 << 40) as f64;
     let fixed = |x: f32| (x as f64 * ONE) as u64;
-    let mut sum = 0u64;
+    let (mut sum, mut most) = (0u64, 0.0f32);
     for i in start..frags.len() {
         sum += fixed(frags.cover[i] * t.cos_weight[frags.pixel[i] as usize]);
+        most = most.max(frags.cover[i]);
     }
     if sum == 0 {
         return;
     }
     let mut scale = target / (sum as f64 / ONE) as f32;
-    for _ in 0..4 {
+    // Only a scale that fills some pixel needs the rounds (most cones
+    // have none: their scale is near 1 and their fullest pixel below it).
+    let rounds = if most * scale >= 1.0 { 4 } else { 0 };
+    for _ in 0..rounds {
         // What the full pixels hold, and what the others would at `scale`.
         let (mut full, mut rest) = (0u64, 0u64);
         for i in start..frags.len() {
