@@ -53,6 +53,8 @@ impl Rng {
 /// pixel's over its camera samples, cover a light evenly. `scramble` XORs
 /// the digits (random digit scrambling, which keeps the stratification).
 /// Both coordinates in `[0, 1)`.
+// The renderer's samplers: unused without it.
+#[cfg_attr(not(feature = "render"), allow(dead_code))]
 pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
     let (mut x, mut y, mut v, mut bits) = (0u32, 0u32, 1u32 << 31, i);
     let mut k = 0;
@@ -74,6 +76,8 @@ pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
 /// every stratum holds one sample (a √n grid rounded up left the last row
 /// short: at 2 spp both samples fell in the pixel's top half, at 32 the
 /// bottom sixth got a third of its share).
+// The renderer's samplers: unused without it.
+#[cfg_attr(not(feature = "render"), allow(dead_code))]
 pub(crate) fn strata(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let rows = (1..=n.isqrt()).rev().find(|&r| n.is_multiple_of(r)).unwrap_or(1);
@@ -83,6 +87,8 @@ pub(crate) fn strata(n: u32) -> (u32, u32) {
 /// Camera sample `s` of `spp` in pixel `(x, y)`: a point jittered by `rng`
 /// within its stratum ([`strata`]), on the film. The renderer and the path
 /// tracer sample pixels alike.
+// The renderer's samplers: unused without it.
+#[cfg_attr(not(feature = "render"), allow(dead_code))]
 pub(crate) fn film_point(x: u32, y: u32, s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
     let (across, down) = strata(spp);
     let fx = x as f32 + ((s % across) as f32 + rng.f32()) / across as f32;
