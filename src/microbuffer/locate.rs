@@ -161,10 +161,22 @@ const SHIFT: f32 = 4.0;
 /// ratio of `G`s means anything).
 #[inline(always)]
 pub(super) fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
-    let zero = V::splat(0.0);
+    let (w, l2) = towards(u);
+    transfer_towards(m, w, l2, n)
+}
+
+/// The unit direction of `u` and `|u|²`.
+#[inline(always)]
+fn towards<V: Real>(u: [V; 3]) -> ([V; 3], V) {
     let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
     let l = l2.sqrt();
-    let w = [u[0] / l, u[1] / l, u[2] / l];
+    ([u[0] / l, u[1] / l, u[2] / l], l2)
+}
+
+/// [`transfer`] towards unit direction `w` at squared distance `l2`.
+#[inline(always)]
+fn transfer_towards<V: Real>(m: [V; 3], w: [V; 3], l2: V, n: [V; 3]) -> V {
+    let zero = V::splat(0.0);
     let facing = (-(m[0] * w[0] + m[1] * w[1] + m[2] * w[2])).max_of(zero);
     let cos = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]).max_of(zero);
     let g = facing * cos / l2;
@@ -182,13 +194,12 @@ pub(super) fn transfer<V: Real>(m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
 /// room they covered about 1 % of the hemisphere too much, and a window's
 /// sky, what the walls leave open, came out 30–45 % short at the
 /// defaults. Within `[½, 3/2]`; 1 where `c` is near 0 (the cluster at the
-/// horizon, which the cone's part below it already cuts).
+/// horizon, which the cone's part below it already cuts) or the term is
+/// not finite (a distance so small that `x` overflows). `w` is the unit
+/// direction towards the centroid, `l2` its squared distance.
 #[inline(always)]
-fn near_field<V: Real>(area: V, m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
+fn near_field<V: Real>(area: V, m: [V; 3], w: [V; 3], l2: V, n: [V; 3]) -> V {
     let zero = V::splat(0.0);
-    let l2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-    let l = l2.sqrt();
-    let w = [u[0] / l, u[1] / l, u[2] / l];
     // `m` may be shorter than 1 (a facet's `A·n̄/A_node`): its length
     // scales the area, its direction gives the facing.
     let len = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
@@ -201,12 +212,11 @@ fn near_field<V: Real>(area: V, m: [V; 3], u: [V; 3], n: [V; 3]) -> V {
     let lit = V::splat(1e-3).lt(c);
     let c = V::select(lit, c, V::splat(1.0));
     let k = V::splat(1.0) + x * (V::splat(1.0) - V::splat(3.0) * facing * facing - facing * nm / c);
+    // Finite first: the clamp would turn a NaN into ½.
+    let inf = V::splat(f32::INFINITY);
+    let finite = (-inf).lt(k) & k.lt(inf);
     let k = k.max_of(V::splat(0.5)).min_of(V::splat(1.5));
-    V::select(
-        lit & unit & zero.lt(l2) & l2.lt(V::splat(f32::INFINITY)),
-        k,
-        V::splat(1.0),
-    )
+    V::select(lit & unit & finite & zero.lt(l2) & l2.lt(inf), k, V::splat(1.0))
 }
 
 /// Places node `s` (showing `light`) in the microbuffer of receiver `f`
@@ -267,7 +277,8 @@ pub(crate) fn locate<V: Real>(
                 vy + V::splat(c[1]) * r,
                 vz + V::splat(c[2]) * r,
             ];
-            *g = transfer(m, u, n) * near_field(s.area, m, u, n);
+            let (w, l2) = towards(u);
+            *g = transfer_towards(m, w, l2, n) * near_field(s.area, m, w, l2, n);
             total = total + *g;
         }
         // Shares of what the facets send; of their projected area where
@@ -304,7 +315,7 @@ pub(crate) fn locate<V: Real>(
     let wy = dx * f.bx + dy * f.by + dz * f.bz;
     let wz = dx * f.nx + dy * f.ny + dz * f.nz;
     let raw = if light.kind == PLANAR {
-        raw * near_field(s.area, [s.nx, s.ny, s.nz], [vx, vy, vz], n)
+        raw * near_field(s.area, [s.nx, s.ny, s.nz], [dx, dy, dz], d2, n)
     } else {
         raw
     };

@@ -32,18 +32,17 @@ pub(super) fn build_subtree(
     }
 
     let len = order.len();
-    let fits = |larger: usize| budget > 0 && ceil_log2(larger) < budget;
-    let mid = match back_to_back(surfels, order, lo, hi).filter(|&(_, larger)| fits(larger)) {
+    let fits = |back: usize| budget > 0 && ceil_log2(back.max(len - back)) < budget;
+    let mid = match back_to_back(surfels, order, lo, hi).filter(|&(_, back)| fits(back)) {
         // Both sides of a hollow solid (a room's wall, inside and outside)
         // go to different children, however close they lie: a
         // cluster holding both is drawn as neither (its mean normal
         // cancels) and shows the light of the side a receiver cannot see —
         // sky through closed walls, a sunlit outside inside the room. One
         // side alone is culled whole by the node test where it faces away.
-        Some((axis, _)) => {
-            let back = |i: u32| surfels[i as usize].normal[axis] < 0.0;
-            order.sort_unstable_by_key(|&i| (!back(i), i));
-            order.iter().filter(|&&i| back(i)).count()
+        Some((axis, back)) => {
+            order.sort_unstable_by_key(|&i| (surfels[i as usize].normal[axis] >= 0.0, i));
+            back
         }
         // Else (or where the larger side would not fit in the depth
         // budget) the median along the widest axis; the index breaks ties, so
@@ -105,8 +104,8 @@ const SIDE_SHARE: f64 = 0.05;
 /// node (a slab, a box, a flat wall's two sides) its facets show from any
 /// side; faces that face each other (a room's opposite walls) hold a space
 /// that a spatial split parts as well. Of several axes, the one with the
-/// most area on its lesser side; with it, how many surfels the larger
-/// child would hold (those with a negative component go one way).
+/// most area on its lesser side; with it, how many surfels have a
+/// negative component along it (they go to the first child).
 fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option<(usize, usize)> {
     // Per axis and side (`+`, `−`): the area, and the extreme positions
     // along the axis of those facing that way.
@@ -150,7 +149,7 @@ fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option
             .iter()
             .filter(|&&i| surfels[i as usize].normal[axis] < 0.0)
             .count();
-        (axis, back.max(order.len() - back))
+        (axis, back)
     })
 }
 
