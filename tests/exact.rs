@@ -77,15 +77,7 @@ fn measure(
             }
         })
         .collect();
-    let g = Gather {
-        max_solid_angle: omega,
-        light_offset,
-        resolution: n,
-        lanes: !matches!(what, Quantity::Glossy(_)),
-        scheme: Scheme::Packet,
-        sky: scene.sky as f32,
-    };
-    let (v, _) = gather(tree, probes, what, &g).expect("gather");
+    let v = gathered(scene, tree, probes, what, cut, n);
     let s = stats(&v, &exact);
     eprintln!(
         "{cloud}, Ω {omega}, light offset {light_offset}, N {n}: RMSE {:.3} %, bias {:+.3} %",
@@ -93,6 +85,27 @@ fn measure(
         100.0 * s.bias
     );
     s
+}
+
+/// `what` gathered at `probes` as the renderer's 16-lane pipeline does
+/// (the scalar one for a glossy lobe), under the scene's sky.
+fn gathered(
+    scene: &Scene,
+    tree: &pbgi::Tree,
+    probes: &[Probe],
+    what: Quantity,
+    cut: (f32, f32),
+    n: usize,
+) -> Vec<f64> {
+    let g = Gather {
+        max_solid_angle: cut.0,
+        light_offset: cut.1,
+        resolution: n,
+        lanes: !matches!(what, Quantity::Glossy(_)),
+        scheme: Scheme::Packet,
+        sky: scene.sky as f32,
+    };
+    gather(tree, probes, what, &g).expect("gather").0
 }
 
 fn mid(scene: &Scene) -> Vec<Probe> {
@@ -467,15 +480,7 @@ fn a_closed_box_with_thick_walls_lets_nothing_of_its_outside_in() {
             let tree = scene.tree(2, seed).expect("valid surfels");
             for &omega in omegas {
                 for n in [14, 24] {
-                    let g = Gather {
-                        max_solid_angle: omega,
-                        light_offset: 0.0,
-                        resolution: n,
-                        lanes: true,
-                        scheme: Scheme::Packet,
-                        sky: scene.sky as f32,
-                    };
-                    let (v, _) = gather(&tree, &probes, Quantity::Irradiance, &g).expect("gather");
+                    let v = gathered(&scene, &tree, &probes, Quantity::Irradiance, (omega, 0.0), n);
                     let lit: Vec<(&str, &str, f64)> = probes
                         .iter()
                         .zip(&v)
