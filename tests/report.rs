@@ -7,7 +7,7 @@ use crate::common;
 use pbgi::render::{ReferenceOptions, RenderOptions, render_reference};
 use pbgi::report::{
     ErrorPoint, Method, PATH_TRACER, Reach, ReportError, SweepOptions, default_curves, equal_error,
-    error_sweep, from_csv, time_for, to_csv,
+    equal_error_markdown, error_sweep, external_points, from_csv, time_for, to_csv,
 };
 use pbgi::scene::builtin::cornell_box;
 
@@ -143,6 +143,75 @@ fn the_equal_error_table_takes_the_best_curve() {
     assert!(rows[0].path_tracer.is_none() && rows[0].ratio().is_none());
 }
 
+/// Denoised path tracing is a column of its own: per error its soonest
+/// curve (never counted as point-based or as the plain path tracer), and
+/// its time over the best point-based one; the Markdown table has both
+/// ratios where denoised points exist and keeps its four columns where none
+/// do.
+#[test]
+fn denoised_path_tracing_gets_a_ratio_of_its_own() {
+    use Method::{Denoised, PathTracer, PointBased};
+    let points = [
+        point(PointBased, "defaults", 1, 2.0, 0.06),
+        point(PointBased, "defaults", 4, 4.0, 0.02),
+        point(PathTracer, PATH_TRACER, 16, 1.0, 0.1),
+        point(PathTracer, PATH_TRACER, 256, 16.0, 0.025),
+        // Slow and fast denoisers; the fast one at 4 % in 0.5 s, 2 % in 2 s.
+        point(Denoised, "slow + OIDN", 4, 3.0, 0.04),
+        point(Denoised, "slow + OIDN", 16, 12.0, 0.02),
+        point(Denoised, "fast + OIDN", 4, 0.5, 0.04),
+        point(Denoised, "fast + OIDN", 16, 2.0, 0.02),
+    ];
+    let rows = equal_error(&points, &[0.04, 0.02]);
+    let (label, dn) = rows[0].denoised.clone().unwrap();
+    assert_eq!(label, "fast + OIDN");
+    assert!(close(dn.seconds, 0.5) && !dn.extrapolated, "{dn:?}");
+    let (label, pb) = rows[1].point_based.clone().unwrap();
+    assert_eq!(label, "defaults");
+    assert!(close(pb.seconds, 4.0));
+    let r = rows[1].ratio_denoised().unwrap();
+    assert!(close(r.seconds, 2.0 / 4.0) && !r.extrapolated, "{r:?}");
+    // The plain path tracer's ratio is its own curve's, not a denoiser's.
+    assert!(close(
+        rows[1].path_tracer.unwrap().seconds,
+        16.0 * (0.025f64 / 0.02).powi(2)
+    ));
+    let md = equal_error_markdown(&points, &[0.04, 0.02]);
+    assert!(md.contains("| denoised / point-based |"), "{md}");
+    assert!(
+        md.contains("| 2 % | ~25.0 s | 2.00 s (fast + OIDN) | 4.00 s (defaults) | ~6.25× | 0.50× |"),
+        "{md}"
+    );
+    let md = equal_error_markdown(&points[..4], &[0.02]);
+    assert!(!md.contains("denoised"), "{md}");
+}
+
+/// The list `scripts/denoised.py` writes reads back; a bad line is an error
+/// naming its number.
+#[test]
+fn the_list_of_denoised_images_reads_back() {
+    let text = "label,spp,seconds,image\n\"Mitsuba 3 + OIDN\",16,0.520000,mitsuba-16.exr\n\n\
+                \"pbgi path tracer + OIDN\",64,1.250000,pbgi-64.exr\n";
+    let e = external_points(text).unwrap();
+    assert_eq!(e.len(), 2);
+    assert_eq!(
+        (e[1].label.as_str(), e[1].spp, e[1].seconds),
+        ("pbgi path tracer + OIDN", 64, 1.25)
+    );
+    assert_eq!(e[1].image, "pbgi-64.exr");
+    let line = |from: &str, to: &str| match external_points(&text.replacen(from, to, 1)) {
+        Err(ReportError::Csv { line, what, .. }) => (line, what),
+        other => panic!("{from} → {to}: {other:?}"),
+    };
+    assert_eq!(line(",64,", ",0,"), (4, "bad spp"));
+    assert_eq!(line("0.520000", "nan"), (2, "seconds not a positive number"));
+    assert_eq!(line(",mitsuba-16.exr", ""), (2, "expected 4 fields"));
+    assert_eq!(
+        line("label,spp", "spp,label"),
+        (1, "not the header label,spp,seconds,image")
+    );
+}
+
 /// What `to_csv` writes, `from_csv` reads back to the same points (times
 /// in micro-seconds), a label with a comma and a quote included; a bad line
 /// is an error naming its number.
@@ -152,6 +221,7 @@ fn the_csv_reads_back_what_it_wrote() {
         point(Method::PointBased, "defaults", 1, 6.25, 0.0763),
         point(Method::PointBased, "Ω 0.02, \"dense\" gathers", 4, 14.5, 0.0284),
         point(Method::PathTracer, PATH_TRACER, 1024, 50.125, 0.0231),
+        point(Method::Denoised, "Mitsuba 3 + OIDN", 64, 0.75, 0.0312),
     ];
     points[1].floor = 0.0125;
     let text = to_csv("box, small", &points);
@@ -439,6 +509,51 @@ fn the_cli_report_runs_end_to_end() {
         md.contains("the mean of") && md.contains("its own noise about 0.00 %"),
         "{md}"
     );
+
+    // Denoised path tracing made beforehand joins the table with a ratio of
+    // its own; a list naming a missing image is refused before the sweep,
+    // naming the list and the image.
+    let dn = dir.join("denoised");
+    std::fs::create_dir_all(&dn).unwrap();
+    let o = common::pbgi_command()
+        .args(["reference", scene_s, "--spp", "4", "--seed", "3", "-o"])
+        .arg(dn.join("pt-4.exr"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let list = dn.join("denoised.csv");
+    std::fs::write(&list, "label,spp,seconds,image\n\"a denoiser\",4,0.5,pt-4.exr\n").unwrap();
+    let report_with = |list: &Path| {
+        run(&[
+            scene_s,
+            "--reference",
+            r,
+            "--out",
+            out_s,
+            "--spp",
+            "1",
+            "--path-tracer-spp",
+            "4",
+            "--denoised",
+            list.to_str().unwrap(),
+        ])
+    };
+    let (ok, text) = report_with(&list);
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("denoised / point-based") && text.contains("| a denoiser |"),
+        "{text}"
+    );
+    let csv = std::fs::read_to_string(out_dir.join("error.csv")).unwrap();
+    assert!(csv.contains(",denoised,a denoiser,4,"), "{csv}");
+    let missing = dn.join("missing.csv");
+    std::fs::write(&missing, "label,spp,seconds,image\nx,4,0.5,nowhere.exr\n").unwrap();
+    let (ok, text) = report_with(&missing);
+    assert!(
+        !ok && text.contains("missing.csv") && text.contains("nowhere.exr"),
+        "{text}"
+    );
+
     let (ok, text) = run(&[
         "cornell-box",
         "--reference",

@@ -66,6 +66,7 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
         let method = match p.method {
             Method::PointBased => "pbgi",
             Method::PathTracer => "path-tracer",
+            Method::Denoised => "denoised",
         };
         let _ = writeln!(
             s,
@@ -128,6 +129,7 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
         let method = match f[1].as_str() {
             "pbgi" => Method::PointBased,
             "path-tracer" => Method::PathTracer,
+            "denoised" => Method::Denoised,
             _ => return Err(bad(i, "unknown method", line)),
         };
         scene.clone_from(&f[0]);
@@ -144,4 +146,74 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
         });
     }
     Ok((scene, points))
+}
+
+/// The header of a list of images rendered outside the report.
+const EXTERNAL_HEADER: &str = "label,spp,seconds,image";
+
+/// One image rendered outside the report (`scripts/denoised.sh` writes
+/// them): its curve, paths per pixel, wall-clock seconds and file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct External {
+    /// Its curve's label, e.g. "Mitsuba 3 + OIDN".
+    pub label: String,
+    /// Paths per pixel.
+    pub spp: u32,
+    /// Wall-clock seconds from scene file to denoised image.
+    pub seconds: f64,
+    /// The image, as written (relative paths are the caller's to resolve).
+    pub image: String,
+}
+
+/// Reads a list of images rendered outside the report: the header
+/// `label,spp,seconds,image`, then one line each. A line that cannot be
+/// read is a [`ReportError::Csv`] naming it.
+///
+/// ```
+/// use pbgi::report::external_points;
+///
+/// let text = "label,spp,seconds,image\n\"Mitsuba 3 + OIDN\",16,0.52,mitsuba-16.exr\n";
+/// let e = external_points(text).unwrap();
+/// assert_eq!((e[0].label.as_str(), e[0].spp, e[0].image.as_str()), ("Mitsuba 3 + OIDN", 16, "mitsuba-16.exr"));
+/// assert!(external_points("label,spp,seconds,image\nx,16,-1,a.exr\n").is_err());
+/// ```
+pub fn external_points(text: &str) -> Result<Vec<External>, ReportError> {
+    let mut lines = text.lines().enumerate();
+    let bad = |i: usize, what: &'static str, line: &str| ReportError::Csv {
+        line: i + 1,
+        what,
+        text: line.to_string(),
+    };
+    match lines.next() {
+        Some((_, h)) if h.trim() == EXTERNAL_HEADER => {}
+        h => {
+            return Err(bad(
+                0,
+                "not the header label,spp,seconds,image",
+                h.map_or("", |h| h.1),
+            ));
+        }
+    }
+    let mut out = Vec::new();
+    for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
+        let f = split(line).ok_or_else(|| bad(i, "a quote left open", line))?;
+        let [label, spp, seconds, image] = f.as_slice() else {
+            return Err(bad(i, "expected 4 fields", line));
+        };
+        out.push(External {
+            label: label.clone(),
+            spp: spp
+                .parse()
+                .ok()
+                .filter(|&n| n > 0)
+                .ok_or_else(|| bad(i, "bad spp", line))?,
+            seconds: seconds
+                .parse::<f64>()
+                .ok()
+                .filter(|s| s.is_finite() && *s > 0.0)
+                .ok_or_else(|| bad(i, "seconds not a positive number", line))?,
+            image: image.clone(),
+        });
+    }
+    Ok(out)
 }

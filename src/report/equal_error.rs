@@ -62,7 +62,7 @@ pub fn series(points: &[ErrorPoint]) -> Vec<Series> {
         let offset = costliest.map_or(0.0, |p| p.floor);
         s.floor = fitted_floor(&s.points).max(match s.method {
             Method::PathTracer => offset,
-            Method::PointBased => offset.hypot(reference),
+            Method::PointBased | Method::Denoised => offset.hypot(reference),
         });
     }
     out
@@ -191,17 +191,39 @@ pub struct EqualError {
     /// The point-based curve that reaches it soonest, and when; one that
     /// reaches it between measured points wins over any extrapolated one.
     pub point_based: Option<(String, Reach)>,
+    /// The denoised path tracing that reaches it soonest, chosen alike.
+    pub denoised: Option<(String, Reach)>,
 }
 
 impl EqualError {
     /// The path tracer's time over the point-based one (above 1: the
     /// point-based renderer is faster), extrapolated if either is.
     pub fn ratio(&self) -> Option<Reach> {
-        let (pt, (_, pb)) = (self.path_tracer?, self.point_based.as_ref()?);
-        Some(Reach {
-            seconds: pt.seconds / pb.seconds,
-            extrapolated: pt.extrapolated || pb.extrapolated,
-        })
+        Some(over(self.path_tracer?, self.point_based.as_ref()?.1))
+    }
+
+    /// The best denoised path tracing's time over the point-based one
+    /// (above 1: the point-based renderer is faster).
+    pub fn ratio_denoised(&self) -> Option<Reach> {
+        Some(over(self.denoised.as_ref()?.1, self.point_based.as_ref()?.1))
+    }
+}
+
+/// `a`'s time over `b`'s, extrapolated if either is.
+fn over(a: Reach, b: Reach) -> Reach {
+    Reach {
+        seconds: a.seconds / b.seconds,
+        extrapolated: a.extrapolated || b.extrapolated,
+    }
+}
+
+/// Keeps the sooner of `best` and `(label, r)`: measured beats
+/// extrapolated, as the model flatters a curve beyond its ends (fixed costs
+/// below).
+fn keep_soonest(best: &mut Option<(String, Reach)>, label: &str, r: Reach) {
+    let key = |r: &Reach| (r.extrapolated, r.seconds);
+    if best.as_ref().is_none_or(|b| key(&r) < key(&b.1)) {
+        *best = Some((label.to_string(), r));
     }
 }
 
@@ -212,27 +234,22 @@ pub fn equal_error(points: &[ErrorPoint], errors: &[f64]) -> Vec<EqualError> {
         .iter()
         .map(|&error| {
             let mut path_tracer = None;
-            let mut point_based: Option<(String, Reach)> = None;
+            let (mut point_based, mut denoised) = (None, None);
             for s in &all {
                 let Some(r) = time_above_floor(&s.time_error(), s.floor, error) else {
                     continue;
                 };
                 match s.method {
                     Method::PathTracer => path_tracer = Some(r),
-                    Method::PointBased => {
-                        // Measured beats extrapolated: the model flatters a
-                        // curve beyond its ends (fixed costs below).
-                        let key = |r: &Reach| (r.extrapolated, r.seconds);
-                        if point_based.as_ref().is_none_or(|b| key(&r) < key(&b.1)) {
-                            point_based = Some((s.label.clone(), r));
-                        }
-                    }
+                    Method::PointBased => keep_soonest(&mut point_based, &s.label, r),
+                    Method::Denoised => keep_soonest(&mut denoised, &s.label, r),
                 }
             }
             EqualError {
                 error,
                 path_tracer,
                 point_based,
+                denoised,
             }
         })
         .collect()

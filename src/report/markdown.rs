@@ -30,27 +30,49 @@ fn percent(e: f64) -> String {
     }
 }
 
-/// The equal-error table (path tracer, best point-based curve, their ratio)
-/// at each of `errors`, then every curve's time at each.
+/// The equal-error table at each of `errors`: the path tracer, the best
+/// point-based curve and their ratio; where the sweep has denoised path
+/// tracing, its best curve and the ratio against it too. Then every curve's
+/// time at each.
 pub fn equal_error_markdown(points: &[ErrorPoint], errors: &[f64]) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| rel. RMSE | path tracer | point-based (best curve) | path tracer / point-based |\n\
-         | --- | --- | --- | --- |"
-    );
+    let denoised = points.iter().any(|p| p.method == Method::Denoised);
+    if denoised {
+        let _ = writeln!(
+            s,
+            "| rel. RMSE | path tracer | denoised path tracing (best) | point-based (best curve) | \
+             path tracer / point-based | denoised / point-based |\n\
+             | --- | --- | --- | --- | --- | --- |"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "| rel. RMSE | path tracer | point-based (best curve) | path tracer / point-based |\n\
+             | --- | --- | --- | --- |"
+        );
+    }
     let none = || "—".to_string();
+    let labelled = |best: &Option<(String, Reach)>| {
+        best.as_ref().map_or_else(none, |(label, r)| {
+            approx(r, format!("{} ({label})", seconds(r.seconds)))
+        })
+    };
+    let times = |r: Option<Reach>| r.map_or_else(none, |r| approx(&r, format!("{:.2}×", r.seconds)));
     for row in equal_error(points, errors) {
         let pt = row
             .path_tracer
             .map_or_else(none, |r| approx(&r, seconds(r.seconds)));
-        let pb = row.point_based.as_ref().map_or_else(none, |(label, r)| {
-            approx(r, format!("{} ({label})", seconds(r.seconds)))
-        });
-        let ratio = row
-            .ratio()
-            .map_or_else(none, |r| approx(&r, format!("{:.2}×", r.seconds)));
-        let _ = writeln!(s, "| {} | {pt} | {pb} | {ratio} |", percent(row.error));
+        let (pb, ratio) = (labelled(&row.point_based), times(row.ratio()));
+        if denoised {
+            let (dn, ratio_dn) = (labelled(&row.denoised), times(row.ratio_denoised()));
+            let _ = writeln!(
+                s,
+                "| {} | {pt} | {dn} | {pb} | {ratio} | {ratio_dn} |",
+                percent(row.error)
+            );
+        } else {
+            let _ = writeln!(s, "| {} | {pt} | {pb} | {ratio} |", percent(row.error));
+        }
     }
     let all = series(points);
     let _ = write!(s, "\nTime along each curve:\n\n| rel. RMSE |");
@@ -101,7 +123,7 @@ pub fn to_markdown(scene: &str, points: &[ErrorPoint], errors: &[f64], context: 
                 "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
                 p.label, p.spp, p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
             ),
-            Method::PathTracer => writeln!(
+            Method::PathTracer | Method::Denoised => writeln!(
                 s,
                 "| {} | {} | | | | {:.3} | {:.4} |",
                 p.label, p.spp, p.total_s, p.rel_rmse

@@ -28,7 +28,7 @@ pub use bench::{BenchOptions, BenchRow, bench};
 pub use compare::{
     Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse, side_by_side,
 };
-pub use csv::{from_csv, to_csv};
+pub use csv::{External, external_points, from_csv, to_csv};
 pub use equal_error::{
     EqualError, Reach, Series, equal_error, fitted_floor, series, time_above_floor, time_for,
 };

@@ -13,9 +13,9 @@ use super::equal_error::series;
 use super::error::ReportError;
 use super::sweep::{ErrorPoint, Method};
 
-/// One curve: name, whether it is the path tracer's, and `(seconds,
-/// relative RMSE)` points by rising spp.
-type Curve = (String, bool, Vec<(f64, f64)>);
+/// One curve: name, which renderer, and `(seconds, relative RMSE)` points
+/// by rising spp.
+type Curve = (String, Method, Vec<(f64, f64)>);
 
 fn curves(points: &[ErrorPoint]) -> Vec<Curve> {
     series(points)
@@ -24,8 +24,9 @@ fn curves(points: &[ErrorPoint]) -> Vec<Curve> {
             let name = match s.method {
                 Method::PointBased => format!("pbgi {} (spp sweep)", s.label),
                 Method::PathTracer => format!("{} (spp sweep)", s.label),
+                Method::Denoised => format!("{} (denoised, spp sweep)", s.label),
             };
-            (name, s.method == Method::PathTracer, s.time_error())
+            (name, s.method, s.time_error())
         })
         .collect()
 }
@@ -119,20 +120,38 @@ where
             )))
             .map_err(err)?;
     }
-    let mut next = 0;
-    for (name, path_tracer, pts) in curves {
-        let color = if *path_tracer {
-            BLACK
-        } else {
-            next += 1;
-            COLORS[(next - 1) % COLORS.len()]
+    // Path tracing is black (denoised: dark and dashed); each point-based
+    // curve has a colour of its own.
+    let dark = [RGBColor(0x50, 0x50, 0x50), RGBColor(0x80, 0x60, 0x00)];
+    let (mut next, mut next_dark) = (0, 0);
+    for (name, method, pts) in curves {
+        let color = match method {
+            Method::PathTracer => BLACK,
+            Method::Denoised => {
+                next_dark += 1;
+                dark[(next_dark - 1) % dark.len()]
+            }
+            Method::PointBased => {
+                next += 1;
+                COLORS[(next - 1) % COLORS.len()]
+            }
         };
         let pts: Vec<(f64, f64)> = pts.iter().copied().filter(|&(t, e)| t > 0.0 && e > 0.0).collect();
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-            .map_err(err)?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        let style = color.stroke_width(2);
+        let legend = move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style);
+        if *method == Method::Denoised {
+            chart
+                .draw_series(DashedLineSeries::new(pts.clone(), 8, 4, style))
+                .map_err(err)?
+                .label(name.clone())
+                .legend(legend);
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(err)?
+                .label(name.clone())
+                .legend(legend);
+        }
         chart
             .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
             .map_err(err)?;

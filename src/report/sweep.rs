@@ -18,6 +18,10 @@ pub enum Method {
     PointBased,
     /// The path tracer.
     PathTracer,
+    /// Path tracing and a denoiser, rendered outside the sweep (Mitsuba 3
+    /// or `pbgi reference`, then Intel OIDN: `scripts/denoised.sh`) and
+    /// measured against the same reference ([`external_points`](super::external_points)).
+    Denoised,
 }
 
 /// The label of the path tracer's curve.

@@ -112,6 +112,12 @@ pub struct ReportArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Denoised path tracing rendered beforehand, to measure beside the
+    /// sweep: a CSV `label,spp,seconds,image` as `scripts/denoised.sh`
+    /// writes (Mitsuba 3 and pbgi's path tracer, each through Intel OIDN);
+    /// image paths relative to the CSV's folder. May be given several times.
+    #[arg(long)]
+    pub denoised: Vec<PathBuf>,
     #[command(flatten)]
     pub settings: Settings,
 }

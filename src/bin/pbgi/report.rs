@@ -6,9 +6,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::render::{ReferenceOptions, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{
-    DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, Grid, SweepOptions, SweepProgress, check_reference, default_curves,
-    describe, emitter_mask, equal_error_markdown, error_sweep, from_csv, mean_reference, to_csv, to_markdown,
+    DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, ErrorPoint, External, Grid, Method, SweepOptions, SweepProgress,
+    check_reference, compare, default_curves, describe, emitter_mask, equal_error_markdown, error_sweep,
+    external_points, from_csv, mean_reference, to_csv, to_markdown,
 };
+use pbgi::scene::Scene;
 
 use crate::args::{ReportArgs, Res, parse_choices, parse_gathers};
 use crate::{load_scene, progress_bar, read_exr, thread_pool, tick, write_image};
@@ -89,6 +91,53 @@ fn sweep_options(a: &ReportArgs, emitters: bool) -> Res<SweepOptions> {
     })
 }
 
+/// The images of each `--denoised` list, their paths resolved against the
+/// list's folder and checked to exist (before the sweep, so a typo does not
+/// wait for it).
+fn denoised_lists(a: &ReportArgs) -> Res<Vec<(std::path::PathBuf, External)>> {
+    let mut out = Vec::new();
+    for csv in &a.denoised {
+        let text = std::fs::read_to_string(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let dir = csv.parent().unwrap_or(std::path::Path::new("."));
+        for e in external_points(&text).map_err(|e| format!("{}: {e}", csv.display()))? {
+            let path = dir.join(&e.image);
+            if !path.exists() {
+                return Err(format!("{}: {}: no such image", csv.display(), path.display()).into());
+            }
+            out.push((path, e));
+        }
+    }
+    Ok(out)
+}
+
+/// Each denoised image measured against `reference` as the sweep's are.
+fn measure_denoised(
+    scene: &Scene,
+    reference: &pbgi::render::Image,
+    images: &[(std::path::PathBuf, External)],
+) -> Res<Vec<ErrorPoint>> {
+    let mask = emitter_mask(scene);
+    images
+        .iter()
+        .map(|(path, e)| {
+            let image = read_exr(path)?;
+            check_reference(scene, &image).map_err(|err| format!("{}: {err}", path.display()))?;
+            let c = compare(&image, reference, &mask).map_err(|err| format!("{}: {err}", path.display()))?;
+            Ok(ErrorPoint {
+                method: Method::Denoised,
+                label: e.label.clone(),
+                spp: e.spp,
+                pre_s: 0.0,
+                trav_s: 0.0,
+                others_s: 0.0,
+                total_s: e.seconds,
+                rel_rmse: c.rel_rmse,
+                floor: c.floor,
+            })
+        })
+        .collect()
+}
+
 fn list(spp: &[u32]) -> String {
     spp.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
 }
@@ -100,6 +149,7 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     let targets = targets(a)?;
     let scene = load_scene(&a.scene)?;
     let sweep = sweep_options(a, scene.has_emitters())?;
+    let denoised = denoised_lists(a)?;
     let pool = thread_pool(a.threads)?;
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let reference_note;
@@ -181,7 +231,8 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
         let image = (p.done + 1).min(p.images);
         bar.set_message(format!("{left}; image {image}/{}: {}", p.images, p.what));
     };
-    let points = pool.install(|| error_sweep(&scene, &reference, &sweep, &on_progress))?;
+    let mut points = pool.install(|| error_sweep(&scene, &reference, &sweep, &on_progress))?;
+    points.extend(measure_denoised(&scene, &reference, &denoised)?);
     let took = bar.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let threads = pool.current_num_threads();
@@ -190,9 +241,16 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
         "{reference_note} Relative RMSE over the pixels that see no emitter; wall-clock \
          seconds on {threads} thread(s); the sweep took {}. Each point-based curve holds its \
          settings while the camera samples per pixel (spp) rise{}; the path tracer's raises its \
-         paths per pixel.",
+         paths per pixel.{}",
         clock(took),
-        base.map_or(String::new(), |o| format!(" (the first: {})", describe(o)))
+        base.map_or(String::new(), |o| format!(" (the first: {})", describe(o))),
+        if denoised.is_empty() {
+            ""
+        } else {
+            " Denoised path tracing was rendered beforehand (`scripts/denoised.sh`: Intel OIDN's RT \
+             filter, HDR, colour only); its seconds run from the scene file to the denoised image, \
+             the scene's load included, Mitsuba's JIT warm."
+        }
     );
     let files = [
         ("error.csv", to_csv(&scene.name, &points)),

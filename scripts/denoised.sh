@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Denoised path tracing beside pbgi, in one run: Mitsuba 3 + Intel OIDN and
+# pbgi's own path tracer + OIDN (scripts/denoised.py), then `pbgi report`
+# with those curves added.
+#
+#   scripts/denoised.sh SCENE [--xml MITSUBA.xml] [--spp 1,4,16,64,256]
+#       [--out DIR] [--repeat N] [-- PBGI-REPORT-ARGS...]
+#
+# e.g. the Cornell box (pbgi's built-in box and its Mitsuba export):
+#   scripts/denoised.sh cornell-box --xml ../shared/scenes/cornell-box/cbox.xml \
+#       --out report/cornell -- --reference refs/cornell-4096-s7.exr
+#
+# Everything after `--` goes to `pbgi report SCENE --out DIR --denoised
+# DIR/denoised/denoised.csv`; without `--` only the denoised images are made.
+# The first run makes a venv in target/denoise-venv (mitsuba 3.9.1, drjit,
+# pyoidn, numpy from PyPI) and installs Debian's libllvm19 if Dr.Jit's LLVM
+# backend is missing (as root); later runs reuse it.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+venv=target/denoise-venv
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import mitsuba, pyoidn" 2>/dev/null; then
+    echo "making $venv (mitsuba, drjit, pyoidn, numpy)" >&2
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet --upgrade pip
+    "$venv/bin/pip" install --quiet "mitsuba==3.9.1" pyoidn numpy
+fi
+if ! "$venv/bin/python" -c "import mitsuba as mi; mi.set_variant('llvm_ad_rgb')" 2>/dev/null; then
+    if [ "$(id -u)" = 0 ]; then
+        apt-get install -y --no-install-recommends libllvm19 >&2
+    else
+        echo "Mitsuba's llvm_ad_rgb variant needs libLLVM: apt-get install libllvm19" >&2
+        exit 1
+    fi
+fi
+
+[ -x target/release/pbgi ] || cargo build --release
+
+scene=${1:?"usage: scripts/denoised.sh SCENE [--xml X.xml] [--spp ...] [--out DIR] [-- REPORT-ARGS]"}
+shift
+out=report
+ours=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do
+    case "$1" in
+        --out) out=$2; shift 2 ;;
+        *) ours+=("$1"); shift ;;
+    esac
+done
+"$venv/bin/python" scripts/denoised.py "$scene" --out "$out/denoised" "${ours[@]}"
+if [ "${1:-}" = "--" ]; then
+    shift
+    target/release/pbgi report "$scene" --out "$out" --denoised "$out/denoised/denoised.csv" "$@"
+fi
