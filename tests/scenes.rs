@@ -313,3 +313,55 @@ fn the_cli_honours_pbgi_scene_dir() {
     let text = String::from_utf8_lossy(&list.stdout);
     assert!(text.contains("nave") && text.contains("missing"), "{text}");
 }
+
+/// The command line refuses what would exhaust memory or time, naming the
+/// option and its bounds (`--spp 4000000000` used to abort allocating
+/// 768 GB), negative counts included, and says plainly when a scene file is
+/// missing or is a folder.
+#[test]
+fn the_cli_bounds_its_numbers_and_names_a_missing_file() {
+    let run = |args: &[&str]| {
+        let o = common::pbgi_command().args(args).output().unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).to_string())
+    };
+    for (args, says) in [
+        (
+            &["render", "--spp", "4000000000"][..],
+            "'--spp <SPP>': 4000000000 is not in 1..=65536",
+        ),
+        (
+            &["render", "--spp", "-1"],
+            "'--spp <SPP>': -1 is not in 1..=65536",
+        ),
+        (&["render", "--threads", "0"], "0 threads: expected 1 to 4096"),
+        (&["render", "--bounces", "1000"], "1000 is not in 0..=64"),
+        (
+            &["render", "--direct-samples", "4000000000"],
+            "is not in 0..=4096",
+        ),
+        (&["render", "--surfels", "4000000000"], "is not in 1..=200000000"),
+        (&["reference", "--bounces", "-2"], "-2 is not in -1..=64"),
+        (&["bench", "--rounds", "0"], "0 is not in 1..=100"),
+    ] {
+        let (code, err) = run(args);
+        // A usage error: clap's exit code 2, before any work.
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let dir = temp_dir("cli-files");
+    let missing = dir.join("missing.xml");
+    let (code, err) = run(&["render", missing.to_str().unwrap()]);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains(&format!("{}: not found", missing.display())),
+        "{err}"
+    );
+    let (_, err) = run(&["render", dir.to_str().unwrap()]);
+    assert!(err.contains("a folder, not a scene file"), "{err}");
+    // A name that is no scene still lists the scenes.
+    let (_, err) = run(&["render", "cornel-box"]);
+    assert!(
+        err.contains("no scene or file named") && err.contains("cornell-box"),
+        "{err}"
+    );
+}

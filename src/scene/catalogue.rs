@@ -134,6 +134,13 @@ pub fn resolve_in(name_or_path: &str, scene_dir: &Path) -> Result<Scene, SceneEr
     let p = Path::new(name_or_path);
     if p.exists() {
         load(p)
+    } else if p.extension().is_some() || p.components().count() > 1 {
+        // Written as a file (an extension, a folder): say so, not which
+        // names exist.
+        Err(SceneError::Io {
+            path: p.to_path_buf(),
+            message: "not found".into(),
+        })
     } else {
         Err(SceneError::UnknownScene {
             name: name_or_path.to_string(),

@@ -465,7 +465,16 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SceneError::Io { path, message } => write!(f, "{}: {message}", path.display()),
+            // Line 0: the file as a whole (no line to name).
+            SceneError::Parse {
+                path,
+                line: 0,
+                message,
+            } => write!(f, "{}: {message}", path.display()),
             SceneError::Parse { path, line, message } => write!(f, "{}:{line}: {message}", path.display()),
+            SceneError::Unsupported { path, line: 0, what } => {
+                write!(f, "{}: unsupported: {what}", path.display())
+            }
             SceneError::Unsupported { path, line, what } => {
                 write!(f, "{}:{line}: unsupported: {what}", path.display())
             }

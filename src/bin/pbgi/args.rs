@@ -46,13 +46,13 @@ pub struct BenchArgs {
     )]
     pub schemes: Vec<String>,
     /// Rounds over the schemes; each time is the fastest of its rounds.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = bounded_u32(1, 100), allow_negative_numbers = true)]
     pub rounds: u32,
     /// Worker threads (default 1: the paper's per-core figures).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = threads, allow_negative_numbers = true)]
     pub threads: usize,
     /// Camera samples per pixel (each a receiver).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
     pub spp: u32,
     #[command(flatten)]
     pub settings: Settings,
@@ -69,7 +69,7 @@ pub struct ReportArgs {
     #[arg(long)]
     pub reference: Vec<PathBuf>,
     /// Paths per pixel of the reference when it is path traced here.
-    #[arg(long, default_value_t = 4096)]
+    #[arg(long, default_value_t = 4096, value_parser = bounded_u32(1, MAX_REFERENCE_SPP), allow_negative_numbers = true)]
     pub reference_spp: u32,
     /// Output folder for error.csv, error.md, error.png, error.svg.
     #[arg(long, default_value = "report")]
@@ -110,7 +110,7 @@ pub struct ReportArgs {
     #[arg(long, value_delimiter = ',')]
     pub direct_samples: Vec<u32>,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Denoised path tracing rendered beforehand, to measure beside the
     /// sweep: a CSV `label,spp,seconds,image` as `scripts/denoised.sh`
@@ -134,7 +134,7 @@ pub struct Settings {
     pub microbuffer: usize,
     /// How much a cluster's light offset (its light centroid's distance
     /// from its area centroid) adds to its radius in the cut's test.
-    #[arg(long, default_value_t = RenderOptions::default().cut.light_offset)]
+    #[arg(long, default_value_t = RenderOptions::default().cut.light_offset, help_heading = DEVELOPER)]
     pub light_offset: f32,
     /// Ω of the gathers at receivers with a glossy lobe (which reads where
     /// each cluster's light is drawn, so needs finer clusters).
@@ -142,13 +142,14 @@ pub struct Settings {
     pub glossy_max_solid_angle: f32,
     /// The light offset's weight in the cut of the gathers at receivers
     /// with a glossy lobe.
-    #[arg(long, default_value_t = RenderOptions::default().glossy_light_offset)]
+    #[arg(long, default_value_t = RenderOptions::default().glossy_light_offset, help_heading = DEVELOPER)]
     pub glossy_light_offset: f32,
     /// Microbuffer resolution of the gathers at receivers with a glossy lobe.
     #[arg(long, default_value_t = RenderOptions::default().glossy_microbuffer)]
     pub glossy_microbuffer: usize,
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
-    #[arg(long, default_value_t = RenderOptions::default().bounces)]
+    #[arg(long, default_value_t = RenderOptions::default().bounces,
+          value_parser = bounded_u32(0, MAX_BOUNCES), allow_negative_numbers = true)]
     pub bounces: u32,
     /// Surfels per unit area, instead of a budget (default for the named
     /// scenes, built for it: 2000).
@@ -156,13 +157,13 @@ pub struct Settings {
     pub density: Option<f32>,
     /// Surfel budget: about N surfels whatever the scene's units (default for
     /// a file: 52000; the named scenes keep density 2000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = bounded_u32(1, MAX_SURFELS), allow_negative_numbers = true)]
     pub surfels: Option<u32>,
     /// Hybrid: switch an entry to single below this many active lanes.
-    #[arg(long, default_value_t = CutOptions::default().hybrid_threshold)]
+    #[arg(long, default_value_t = CutOptions::default().hybrid_threshold, help_heading = DEVELOPER)]
     pub hybrid_threshold: u32,
     /// Instruction-set path: auto, avx512, avx2, neon, portable (default: PBGI_ISA or auto).
-    #[arg(long)]
+    #[arg(long, help_heading = DEVELOPER)]
     pub isa: Option<String>,
 }
 
@@ -236,10 +237,11 @@ pub struct ReferenceArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Paths per pixel.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = bounded_u32(1, MAX_REFERENCE_SPP), allow_negative_numbers = true)]
     pub spp: u32,
     /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1 unlimited.
-    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true,
+          value_parser = clap::value_parser!(i32).range(-1..=i64::from(MAX_BOUNCES)))]
     pub bounces: i32,
     /// Which light the image holds: all, direct, or indirect (what the gather computes).
     #[arg(long, default_value = "all")]
@@ -248,7 +250,7 @@ pub struct ReferenceArgs {
     #[arg(long, default_value_t = ReferenceOptions::default().seed)]
     pub seed: u64,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
 }
 
@@ -279,10 +281,11 @@ pub struct RenderArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Traversal scheme: auto, scalar, single, packet or hybrid.
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = "auto", help_heading = DEVELOPER)]
     pub scheme: String,
     /// Stratified camera samples per pixel (antialiasing; each gets direct light).
-    #[arg(long, default_value_t = RenderOptions::default().spp)]
+    #[arg(long, default_value_t = RenderOptions::default().spp,
+          value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
     pub spp: u32,
     /// Where the indirect light is gathered: "sparse" (a lattice of pixels,
     /// refined at edges and where the light changes, interpolated at each
@@ -299,7 +302,7 @@ pub struct RenderArgs {
     pub gather_threshold: f32,
     /// Area-light samples at each camera sample's receiver for direct light
     /// (default 8), stratified over the lights and over the pixel's camera samples.
-    #[arg(long)]
+    #[arg(long, value_parser = bounded_u32(0, MAX_DIRECT_SAMPLES), allow_negative_numbers = true)]
     pub direct_samples: Option<u32>,
     /// Ambient occlusion instead of radiance.
     #[arg(long)]
@@ -308,7 +311,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "all")]
     pub component: String,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     #[command(flatten)]
     pub environment: EnvironmentArgs,
@@ -349,7 +352,7 @@ pub struct BakeArgs {
     #[arg(long)]
     pub ao: bool,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     #[command(flatten)]
     pub environment: EnvironmentArgs,
@@ -367,6 +370,32 @@ impl Default for RenderArgs {
 }
 
 pub type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+/// The heading of the options that tune the kernels rather than the image.
+const DEVELOPER: &str = "Developer options";
+/// Upper bounds of the numeric options: far above any use, below what
+/// exhausts memory or time (4·10⁹ spp allocated 768 GB and aborted).
+const MAX_SPP: u32 = 65_536;
+const MAX_REFERENCE_SPP: u32 = 1 << 24;
+const MAX_DIRECT_SAMPLES: u32 = 4_096;
+const MAX_BOUNCES: u32 = 64;
+const MAX_SURFELS: u32 = 200_000_000;
+const MAX_THREADS: usize = 4_096;
+
+/// A `u32` option within `lo..=hi`: clap names the bound on a value
+/// outside it (a negative one included).
+fn bounded_u32(lo: u32, hi: u32) -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(i64::from(lo)..=i64::from(hi))
+}
+
+/// `--threads`: 1 to [`MAX_THREADS`].
+fn threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if (1..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
+        Ok(n) => Err(format!("{n} threads: expected 1 to {MAX_THREADS}")),
+        Err(_) => Err(format!("{s:?} is not a whole number of threads")),
+    }
+}
 
 pub fn parse_isa(s: &Option<String>) -> Res<Option<Isa>> {
     match s.as_deref().map(str::trim) {

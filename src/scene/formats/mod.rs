@@ -35,6 +35,12 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// As [`load`], with Mitsuba `$name` parameters overriding the file's `<default>`s.
 pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene, SceneError> {
+    if path.is_dir() {
+        return Err(SceneError::Io {
+            path: path.to_path_buf(),
+            message: "a folder, not a scene file (expected .xml, .obj, .ply, .off, .gltf or .glb)".into(),
+        });
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
