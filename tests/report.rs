@@ -86,7 +86,7 @@ fn point(method: Method, label: &str, spp: u32, total_s: f64, rel_rmse: f64) -> 
         spp,
         pre_s: 0.125,
         trav_s: 0.5,
-        others_s: 1.5,
+        shading_s: 1.5,
         total_s,
         rel_rmse,
         floor: 0.0,

@@ -51,7 +51,7 @@ impl Accum {
 #[derive(Default)]
 pub(crate) struct Timers {
     pub trav: Accum,
-    pub others: Accum,
+    pub shading: Accum,
     pub direct: Accum,
 }
 
@@ -461,7 +461,7 @@ impl<'s> Frame<'s> {
             timings: Timings {
                 pre: self.pre,
                 trav: timers.trav.seconds(),
-                others: timers.others.seconds(),
+                shading: timers.shading.seconds(),
                 direct: timers.direct.seconds(),
                 total_wall: self.pre + wall.elapsed().as_secs_f64(),
             },

@@ -16,7 +16,7 @@ pub struct Timings {
     /// Cut traversal.
     pub trav: f64,
     /// Splatting and convolution.
-    pub others: f64,
+    pub shading: f64,
     /// Camera rays and direct light at the receivers.
     pub direct: f64,
     /// Wall-clock seconds of the whole render.

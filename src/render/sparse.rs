@@ -376,7 +376,7 @@ impl Frame<'_> {
         let t2 = Instant::now();
         timers.trav.add((t2 - t1).as_secs_f64());
         let e = gatherer.shade(self.convolution());
-        timers.others.add(t2.elapsed().as_secs_f64());
+        timers.shading.add(t2.elapsed().as_secs_f64());
         for (((x, y), _), e) in hits.iter().zip(&e) {
             if !e.is_finite() {
                 return Err(RenderError::NonFinite {

@@ -224,7 +224,7 @@ impl Frame<'_> {
                 let t2 = Instant::now();
                 timers.trav.add((t2 - t1).as_secs_f64());
                 let out = self.gathered(&packet, gatherer);
-                timers.others.add(t2.elapsed().as_secs_f64());
+                timers.shading.add(t2.elapsed().as_secs_f64());
                 for (&i, (e, l)) in chunk.iter().zip(out) {
                     let (s, pp) = &points[i];
                     if !l.is_finite() {

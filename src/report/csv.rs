@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use super::error::ReportError;
 use super::sweep::{ErrorPoint, Method};
 
+/// `others_s` is the shading's time (its old name, kept so that older sweeps read back).
 const HEADER: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse,floor";
 /// The header before points kept their error's floor: read with floor 0.
 const HEADER_WITHOUT_FLOOR: &str = "scene,method,label,spp,pre_s,trav_s,others_s,total_s,rel_rmse";
@@ -76,7 +77,7 @@ pub fn to_csv(scene: &str, points: &[ErrorPoint]) -> String {
             p.spp,
             p.pre_s,
             p.trav_s,
-            p.others_s,
+            p.shading_s,
             p.total_s,
             p.rel_rmse,
             p.floor
@@ -139,7 +140,7 @@ pub fn from_csv(text: &str) -> Result<(String, Vec<ErrorPoint>), ReportError> {
             spp: f[3].parse().map_err(|_| bad(i, "bad spp", line))?,
             pre_s: num(4)?,
             trav_s: num(5)?,
-            others_s: num(6)?,
+            shading_s: num(6)?,
             total_s: num(7)?,
             rel_rmse: num(8)?,
             floor: if fields == 10 { num(9)? } else { 0.0 },

@@ -112,8 +112,8 @@ pub fn to_markdown(scene: &str, points: &[ErrorPoint], errors: &[f64], context: 
     s.push_str(&equal_error_markdown(points, errors));
     let _ = writeln!(
         s,
-        "\n### Points\n\nTimes in seconds: pre., trav. and others summed over threads, total wall clock.\n\n\
-         | curve | spp | pre. | trav. | others | total | rel. RMSE |\n\
+        "\n### Points\n\nTimes in seconds: pre., trav. and shading summed over threads, total wall clock.\n\n\
+         | curve | spp | pre. | trav. | shading | total | rel. RMSE |\n\
          | --- | --- | --- | --- | --- | --- | --- |"
     );
     for p in points {
@@ -121,7 +121,7 @@ pub fn to_markdown(scene: &str, points: &[ErrorPoint], errors: &[f64], context: 
             Method::PointBased => writeln!(
                 s,
                 "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |",
-                p.label, p.spp, p.pre_s, p.trav_s, p.others_s, p.total_s, p.rel_rmse
+                p.label, p.spp, p.pre_s, p.trav_s, p.shading_s, p.total_s, p.rel_rmse
             ),
             Method::PathTracer | Method::Denoised => writeln!(
                 s,

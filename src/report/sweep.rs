@@ -41,7 +41,7 @@ pub struct ErrorPoint {
     /// Traversal thread-seconds.
     pub trav_s: f64,
     /// Splatting + convolution thread-seconds.
-    pub others_s: f64,
+    pub shading_s: f64,
     /// Wall-clock seconds of the whole image.
     pub total_s: f64,
     /// Relative RMSE against the reference, emitters left out.
@@ -469,7 +469,7 @@ pub fn error_sweep(
                     spp,
                     pre_s: t.pre,
                     trav_s: t.trav,
-                    others_s: t.others,
+                    shading_s: t.shading,
                     total_s: t.total_wall,
                     rel_rmse: m.rel_rmse,
                     floor: m.floor,
@@ -491,7 +491,7 @@ pub fn error_sweep(
                     spp,
                     pre_s: 0.0,
                     trav_s: 0.0,
-                    others_s: 0.0,
+                    shading_s: 0.0,
                     total_s: out.seconds,
                     rel_rmse: m.rel_rmse,
                     floor: m.floor,

@@ -415,13 +415,13 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         "  {:>8} {:>16} {:>8} {:>8} {:>12}",
         "pre.",
         format!("trav. ({})", out.scheme),
-        "others",
+        "shading",
         "direct",
         "total (wall)"
     );
     println!(
         "  {:>8.3} {:>16.3} {:>8.3} {:>8.3} {:>12.3}",
-        t.pre, t.trav, t.others, t.direct, t.total_wall
+        t.pre, t.trav, t.shading, t.direct, t.total_wall
     );
     println!("stages:");
     for s in &out.stages {
@@ -492,7 +492,7 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
     );
     println!(
         "  {:<7} {:>8} {:>10} {:>9} {:>8} {:>7} {:>10} {:>11} {:>9}",
-        "scheme", "pre.", "trav.", "speed-up", "others", "lanes", "nodes/rec", "splats/rec", "frame"
+        "scheme", "pre.", "trav.", "speed-up", "shading", "lanes", "nodes/rec", "splats/rec", "frame"
     );
     for r in rows {
         println!(
@@ -501,7 +501,7 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
             r.pre_s,
             r.trav_s,
             r.speedup_vs_scalar,
-            r.others_s,
+            r.shading_s,
             r.lane_utilization
                 .map_or("–".to_string(), |u| format!("{:.1}%", 100.0 * u)),
             r.nodes_per_receiver,

@@ -129,7 +129,7 @@ fn measure_denoised(
                 spp: e.spp,
                 pre_s: 0.0,
                 trav_s: 0.0,
-                others_s: 0.0,
+                shading_s: 0.0,
                 total_s: e.seconds,
                 rel_rmse: c.rel_rmse,
                 floor: c.floor,
