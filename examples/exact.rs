@@ -35,7 +35,7 @@ use std::time::Instant;
 use glam::Vec3;
 use pbgi::Scheme;
 use pbgi::brdf::GlossyLobe;
-use pbgi::exact::{Gather, Quantity, RoomSpec, Scene, gather, stats};
+use pbgi::exact::{ExactScene, GatherSettings, Quantity, RoomSpec, gather, stats};
 
 const USAGE: &str = "usage: exact [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid] [--offset 2e-5]
@@ -127,7 +127,7 @@ fn main() {
                 None => panic!("unknown scene {other}"),
             },
         };
-        let mut scene = Scene::room(&spec);
+        let mut scene = ExactScene::room(&spec);
         if name == "bounce" {
             scene = scene.without_emitter();
         }
@@ -167,7 +167,7 @@ fn main() {
             let count = scene.surfels(k, None).len();
             for &omega in &omegas {
                 for &n in &ns {
-                    let g = Gather {
+                    let g = GatherSettings {
                         max_solid_angle: omega,
                         light_offset,
                         resolution: n,

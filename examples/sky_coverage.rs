@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 use pbgi::environment::Environment;
-use pbgi::exact::{Scene, opening};
+use pbgi::exact::{ExactScene, opening};
 use pbgi::microbuffer::MicroBuffer;
 use pbgi::{CutOptions, CutRecorder, NodeId, Receiver, Scheme, Traversal};
 
@@ -116,7 +116,7 @@ fn main() -> Result<(), String> {
         }
     }
     let spec = opening(&name).ok_or(format!("no scene {name} (window, sunroom, shell, thin-shell)"))?;
-    let mut scene = Scene::room(&spec).dark_inside();
+    let mut scene = ExactScene::room(&spec).dark_inside();
     scene.sky = 1.0;
     let surfels = scene.surfels(k, None);
     let tree = scene.tree(k, None).map_err(|e| e.to_string())?;

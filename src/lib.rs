@@ -1,9 +1,39 @@
 //! # pbgi — point-based global illumination kernels
 //!
-//! The scene's direct light is baked into surfels ([`Surfel`], [`PointCloud`]);
-//! a bounding-sphere hierarchy ([`Tree`]) clusters them; for each receiver a
-//! top-down traversal picks a *cut* of the tree ([`Traversal`]), whose nodes
-//! are splatted into a small z-buffered raster and convolved with the BRDF.
+//! Light gathered from surfels: give it the lit surfaces as disks
+//! ([`Surfel`]), build a [`Tree`], and ask a [`Gather`] for the irradiance,
+//! occlusion or glossy radiance at any points.
+//!
+//! ```
+//! use pbgi::glam::Vec3;
+//! use pbgi::{Gather, GatherOptions, PointCloud, Surfel, Tree};
+//!
+//! // A glowing 1 × 1 ceiling at height 1, facing down: 32 × 32 disks.
+//! let surfels: Vec<Surfel> = (0..1024)
+//!     .map(|i| Surfel {
+//!         position: Vec3::new((i % 32) as f32 / 32.0, 1.0, (i / 32) as f32 / 32.0),
+//!         normal: -Vec3::Y,
+//!         radius: 1.0 / 32.0 / std::f32::consts::PI.sqrt(), // the cell's area
+//!         radiance: Vec3::ONE,
+//!     })
+//!     .collect();
+//! let tree = Tree::build(&PointCloud::new(surfels)?);
+//! let gather = Gather::new(&tree, &GatherOptions { threads: Some(1), ..Default::default() })?;
+//! let e = gather.irradiance(&[(Vec3::new(0.5, 0.0, 0.5), Vec3::Y)])?; // (position, normal)
+//! assert!(e[0].x > 0.0 && e[0].x < std::f32::consts::PI);
+//! # Ok::<(), pbgi::Error>(())
+//! ```
+//!
+//! [`gather`] says how to choose Ω and N and what error to expect;
+//! `render` (feature `render`, on by default) is a whole renderer built on
+//! it, and `docs/guide.md` in the repository the rest.
+//!
+//! # Underneath: the cut
+//!
+//! A bounding-sphere hierarchy ([`Tree`]) clusters the surfels; for each
+//! receiver a top-down traversal picks a *cut* of the tree ([`Traversal`]),
+//! whose nodes are splatted into a small z-buffered raster, the
+//! microbuffer, and convolved with the BRDF.
 //!
 //! The traversal is written once on `std::simd` with 16 lanes and comes in
 //! four schemes ([`Scheme`]): the scalar reference, *single* (16 nodes of one
@@ -13,7 +43,7 @@
 //!
 //! ```
 //! use pbgi::{CutOptions, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
-//! use glam::Vec3;
+//! use pbgi::glam::Vec3;
 //!
 //! // Your surfels: here a 32 × 32 glowing ceiling facing down.
 //! let surfels: Vec<Surfel> = (0..1024)
@@ -71,6 +101,8 @@
 //!   `π R² < Ω d²` may splat a node whose sphere contains the receiver, and
 //!   the estimate degrades (bounded, not accurate).
 #![feature(portable_simd)]
+// Feature-gated items say which feature they need, in the API docs.
+#![cfg_attr(doc, feature(doc_cfg))]
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 // Every `unsafe` block says why it is sound (a `SAFETY:` comment).
@@ -116,6 +148,10 @@ pub use cut::{
     SplatCounter, Traversal, TraversalStats, auto_scheme,
 };
 pub use error::{Error, Invalid};
+pub use gather::{Gather, GatherOptions, GlossyReceiver, ReceiverOrder};
+/// The vector types of every signature, so a user needs no version of
+/// their own in step with this crate's.
+pub use glam;
 pub use points::{PointCloud, Surfel};
 pub use simd::{Isa, IsaError, LANES};
 pub use tree::{NodeId, NodeView, Tree, TreeFile, TreeFileError};

@@ -18,7 +18,7 @@
 use glam::Vec3;
 use pbgi::Scheme;
 use pbgi::brdf::GlossyLobe;
-use pbgi::exact::{Gather, Probe, Quantity, RoomSpec, Scene, Stats, gather, stats};
+use pbgi::exact::{ExactScene, GatherSettings, Probe, Quantity, RoomSpec, Stats, gather, stats};
 use pbgi::render::RenderOptions;
 
 /// The render's defaults: Ω and N of irradiance (and occlusion) gathers.
@@ -29,12 +29,19 @@ fn defaults() -> (f32, usize) {
 
 /// Mid receivers' error of `what` in `scene` (surfels `k` per cell side,
 /// jittered with a fixed seed).
-fn error(scene: &Scene, probes: &[Probe], k: usize, what: Quantity, omega: f32, n: usize) -> Stats {
+fn error(scene: &ExactScene, probes: &[Probe], k: usize, what: Quantity, omega: f32, n: usize) -> Stats {
     error_with(scene, probes, k, what, (omega, 0.0), n)
 }
 
 /// [`error`] at Ω and the cut's light offset weight `cut`.
-fn error_with(scene: &Scene, probes: &[Probe], k: usize, what: Quantity, cut: (f32, f32), n: usize) -> Stats {
+fn error_with(
+    scene: &ExactScene,
+    probes: &[Probe],
+    k: usize,
+    what: Quantity,
+    cut: (f32, f32),
+    n: usize,
+) -> Stats {
     let tree = scene.tree(k, Some(7)).expect("valid surfels");
     measure(scene, &tree, probes, what, cut, n, &format!("k {k}"))
 }
@@ -43,7 +50,7 @@ fn error_with(scene: &Scene, probes: &[Probe], k: usize, what: Quantity, cut: (f
 /// per cell side: each surfel stands for its own square, so Lambert's
 /// formula over the cells is the exact answer for the cloud itself, also
 /// at a receiver nearer the next wall than the surfel spacing.
-fn grid_error(scene: &Scene, probes: &[Probe], k: usize, what: Quantity, omega: f32, n: usize) -> Stats {
+fn grid_error(scene: &ExactScene, probes: &[Probe], k: usize, what: Quantity, omega: f32, n: usize) -> Stats {
     let tree = scene.tree(k, None).expect("valid surfels");
     measure(
         scene,
@@ -57,7 +64,7 @@ fn grid_error(scene: &Scene, probes: &[Probe], k: usize, what: Quantity, omega: 
 }
 
 fn measure(
-    scene: &Scene,
+    scene: &ExactScene,
     tree: &pbgi::Tree,
     probes: &[Probe],
     what: Quantity,
@@ -90,14 +97,14 @@ fn measure(
 /// `what` gathered at `probes` as the renderer's 16-lane pipeline does
 /// (the scalar one for a glossy lobe), under the scene's sky.
 fn gathered(
-    scene: &Scene,
+    scene: &ExactScene,
     tree: &pbgi::Tree,
     probes: &[Probe],
     what: Quantity,
     cut: (f32, f32),
     n: usize,
 ) -> Vec<f64> {
-    let g = Gather {
+    let g = GatherSettings {
         max_solid_angle: cut.0,
         light_offset: cut.1,
         resolution: n,
@@ -108,21 +115,21 @@ fn gathered(
     gather(tree, probes, what, &g).expect("gather").0
 }
 
-fn mid(scene: &Scene) -> Vec<Probe> {
+fn mid(scene: &ExactScene) -> Vec<Probe> {
     let mut p = scene.probes(2e-5);
     p.retain(|p| p.class == "mid");
     assert!(p.len() >= 20, "too few mid receivers to measure anything");
     p
 }
 
-fn light_room() -> Scene {
-    Scene::room(&RoomSpec::default())
+fn light_room() -> ExactScene {
+    ExactScene::room(&RoomSpec::default())
 }
 
 /// The room without its ceiling: occlusion is one minus the opening's form
 /// factor.
-fn open_room() -> Scene {
-    Scene::room(&RoomSpec {
+fn open_room() -> ExactScene {
+    ExactScene::room(&RoomSpec {
         open_ceiling: true,
         ..Default::default()
     })
@@ -217,7 +224,7 @@ fn a_slab_under_the_light_hides_it_where_it_lies_in_the_pixel() {
     // sub-samples it covers hide what lies behind and the others do not.
     // Composed per pixel (one layer's coverage hiding the whole pixel in
     // proportion) this was 1.73 % mid-wall at Ω 0.01, N 24; now 0.14 %.
-    let scene = Scene::room(&RoomSpec {
+    let scene = ExactScene::room(&RoomSpec {
         blocker: true,
         ..Default::default()
     });
@@ -233,7 +240,7 @@ fn a_light_behind_a_slab_stays_hidden_as_the_resolution_grows() {
     // light behind showed through them, more as N grew: mid-wall irradiance
     // 6.0 / 7.5 / 12.7 % at N 24 / 48 / 96 (Ω 0.002). Each splat now hides
     // what lies behind over its grown disk: 5.6 / 1.8 / 1.4 %.
-    let scene = Scene::room(&RoomSpec {
+    let scene = ExactScene::room(&RoomSpec {
         blocker: true,
         ..Default::default()
     });
@@ -321,7 +328,7 @@ fn a_glossy_lobe_converges_where_clusters_send_their_light_from_their_surface() 
 /// receivers at the defaults, 0.5 % mid-wall), an error of the cloud that
 /// only density lowers; over surfels on a grid each surfel stands for its
 /// own cell and the exact answer is the cloud's own ([`grid_error`]).
-fn every(scene: &Scene) -> Vec<Probe> {
+fn every(scene: &ExactScene) -> Vec<Probe> {
     let p = scene.probes(2e-5);
     assert!(p.iter().filter(|p| p.class == "corner").count() >= 20);
     p
@@ -396,8 +403,8 @@ fn a_surfel_beside_a_nearer_wall_is_not_lost() {
 }
 
 /// A room with openings ([`pbgi::exact::opening`]).
-fn opening(name: &str) -> Scene {
-    Scene::room(&pbgi::exact::opening(name).expect("a scene with openings"))
+fn opening(name: &str) -> ExactScene {
+    ExactScene::room(&pbgi::exact::opening(name).expect("a scene with openings"))
 }
 
 #[test]

@@ -163,6 +163,30 @@ fn any_pool_gives_the_same_bits() {
         assert_eq!(in_pool, threads);
         assert_eq!(bits(&got), want, "{threads} thread(s)");
     }
+    // `GatherOptions::threads`: a pool of the gather's own, with no rayon
+    // in the caller's code, and the same bits; 0 threads is an error
+    // naming the option.
+    for threads in [1, 2] {
+        let opts = GatherOptions {
+            threads: Some(threads),
+            ..Default::default()
+        };
+        let g = Gather::new(&tree, &opts).unwrap();
+        assert_eq!(
+            bits(&g.irradiance(&pairs(&receivers)).unwrap()),
+            want,
+            "threads {threads}"
+        );
+    }
+    let zero = GatherOptions {
+        threads: Some(0),
+        ..Default::default()
+    };
+    match Gather::new(&tree, &zero) {
+        Err(pbgi::Error::InvalidParameter { name, .. }) => assert_eq!(name, "threads"),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("0 threads accepted"),
+    }
 }
 
 #[test]

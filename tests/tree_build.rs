@@ -244,7 +244,7 @@ fn a_hollow_solid_splits_by_orientation_within_the_depth_budget() {
     // The closed thick-walled box: its walls' insides and outsides part by
     // orientation (unequal halves), so the tree is deeper than the median
     // split's ⌈log₂ n⌉, and still within the budget.
-    let scene = pbgi::exact::Scene::room(&pbgi::exact::opening("shell").expect("a scene"));
+    let scene = pbgi::exact::ExactScene::room(&pbgi::exact::opening("shell").expect("a scene"));
     for seed in [None, Some(3)] {
         let surfels = scene.surfels(2, seed);
         let n = surfels.len();

@@ -3,13 +3,13 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{Part, Probe, Scene, WINDOW};
+use super::{ExactScene, Part, Probe, WINDOW};
 use crate::brdf::GlossyLobe;
 use crate::polygon::{clip, projected_solid_angle};
 use crate::rng::Rng;
 use crate::{Error, PointCloud, Surfel, Tree};
 
-impl Scene {
+impl ExactScene {
     /// Surfels: each cell cut into `per_cell × per_cell` squares, one surfel
     /// in each (at a jittered point when `seed` is given, else the centre),
     /// of the square's area, the cell's radiance, the face's normal.

@@ -26,7 +26,7 @@ pub enum Quantity {
 
 /// How to gather.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gather {
+pub struct GatherSettings {
     /// Ω of the cut.
     pub max_solid_angle: f32,
     /// The weight of a node's light offset in the cut
@@ -39,7 +39,7 @@ pub struct Gather {
     pub lanes: bool,
     /// Traversal scheme.
     pub scheme: Scheme,
-    /// The uniform sky the open pixels see (the scene's [`Scene::sky`]).
+    /// The uniform sky the open pixels see (the scene's [`ExactScene::sky`](super::ExactScene::sky)).
     pub sky: f32,
 }
 
@@ -49,7 +49,7 @@ pub fn gather(
     tree: &Tree,
     probes: &[Probe],
     what: Quantity,
-    g: &Gather,
+    g: &GatherSettings,
 ) -> Result<(Vec<f64>, Duration), Error> {
     let t = Traversal::new(
         tree,

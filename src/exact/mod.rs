@@ -24,7 +24,7 @@
 //! Gathering ([`gather`]) uses only the library's public API: the same
 //! traversal and microbuffer pipelines a renderer runs.
 //!
-//! In data-flow order: [`room`](Scene::room) builds a scene, `answer` holds
+//! In data-flow order: [`room`](ExactScene::room) builds a scene, `answer` holds
 //! its exact values (and the surfels and probes a gather sees), `gather`
 //! runs the library on it.
 
@@ -34,7 +34,7 @@ mod answer;
 mod gather;
 mod room;
 
-pub use gather::{Gather, Quantity, Stats, gather, stats};
+pub use gather::{GatherSettings, Quantity, Stats, gather, stats};
 
 /// A rectangle `origin + s·e1 + t·e2` (`s, t ∈ [0, 1]`) cut into `cells[0]
 /// × cells[1]` cells, emitting towards `e1 × e2`.
@@ -188,7 +188,7 @@ pub fn opening(name: &str) -> Option<RoomSpec> {
 
 /// A scene of faces with exact irradiance, occlusion and glossy reflection.
 #[derive(Clone, Debug)]
-pub struct Scene {
+pub struct ExactScene {
     /// The room's walls (inward), the slab's faces (outward), the jambs
     /// and the outer shell.
     pub faces: Vec<Face>,

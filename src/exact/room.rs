@@ -2,11 +2,11 @@
 
 use glam::DVec3;
 
-use super::{Face, Part, RoomSpec, SUN_PATCH, Scene, WINDOW};
+use super::{ExactScene, Face, Part, RoomSpec, SUN_PATCH, WINDOW};
 
-impl Scene {
+impl ExactScene {
     /// The room `[−1, 1]³` of `spec`.
-    pub fn room(spec: &RoomSpec) -> Scene {
+    pub fn room(spec: &RoomSpec) -> ExactScene {
         let cell = 1.0 / spec.cells_per_unit.max(1) as f64;
         let v = DVec3::new;
         let (x2, y2, z2) = (v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), v(0.0, 0.0, 2.0));
@@ -131,7 +131,7 @@ impl Scene {
                 }
             }
         }
-        Scene {
+        ExactScene {
             faces,
             sky: spec.sky.max(0.0),
             window,
@@ -141,7 +141,7 @@ impl Scene {
     /// The same scene with the room's own walls (and the slab) black: what
     /// lights it comes from beyond the walls (the sky and the jambs through
     /// the window, nothing of the outer shell).
-    pub fn dark_inside(&self) -> Scene {
+    pub fn dark_inside(&self) -> ExactScene {
         let mut s = self.clone();
         for f in s.faces.iter_mut().filter(|f| f.part != Part::Beyond) {
             f.radiance.iter_mut().flatten().for_each(|l| *l = 0.0);
@@ -151,7 +151,7 @@ impl Scene {
 
     /// The same scene with the light's cells cut out (holes: they neither
     /// emit nor occlude), for the bounce light alone.
-    pub fn without_emitter(&self) -> Scene {
+    pub fn without_emitter(&self) -> ExactScene {
         let mut s = self.clone();
         for f in &mut s.faces {
             for (r, &e) in f.radiance.iter_mut().zip(&f.emitter) {

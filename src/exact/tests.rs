@@ -3,8 +3,8 @@ use crate::brdf::GlossyLobe;
 
 #[test]
 fn a_closed_room_occludes_everything_and_an_open_one_the_sky_exactly() {
-    let closed = Scene::room(&RoomSpec::default());
-    let open = Scene::room(&RoomSpec {
+    let closed = ExactScene::room(&RoomSpec::default());
+    let open = ExactScene::room(&RoomSpec {
         open_ceiling: true,
         ..Default::default()
     });
@@ -47,7 +47,7 @@ fn through_a_window_lambert_matches_quadrature() {
         roughness: 1.0,
     };
     for name in ["window", "sunroom"] {
-        let s = Scene::room(&opening(name).expect("a scene"));
+        let s = ExactScene::room(&opening(name).expect("a scene"));
         let probes = s.probes(2e-5);
         let mut sky = 0;
         for p in probes
@@ -58,7 +58,7 @@ fn through_a_window_lambert_matches_quadrature() {
             let (e, _) = s.exact(p.position, p.normal);
             let q = s.glossy(p.position, p.normal, p.normal, &flat, 600) * std::f64::consts::PI;
             assert!((q / e - 1.0).abs() < 5e-3, "{name} {p:?}: {e} vs {q}");
-            let dark = Scene {
+            let dark = ExactScene {
                 faces: Vec::new(),
                 ..s.clone()
             };
@@ -71,7 +71,7 @@ fn through_a_window_lambert_matches_quadrature() {
 #[test]
 fn a_thick_walled_room_sees_none_of_its_outside() {
     for name in ["shell", "thin-shell", "sunroom"] {
-        let lit = Scene::room(&opening(name).expect("a scene"));
+        let lit = ExactScene::room(&opening(name).expect("a scene"));
         let mut dark = lit.dark_inside();
         dark.sky = 0.0;
         for p in dark.probes(2e-5) {
@@ -93,7 +93,7 @@ fn a_thick_walled_room_sees_none_of_its_outside() {
 #[test]
 fn lambert_matches_quadrature_with_and_without_the_blocker() {
     for blocker in [false, true] {
-        let s = Scene::room(&RoomSpec {
+        let s = ExactScene::room(&RoomSpec {
             blocker,
             ..Default::default()
         });

@@ -46,7 +46,7 @@
 //!
 //! | Ω (`cut.max_solid_angle`) | N (`microbuffer`) | irradiance | glossy (α 0.3) | µs per receiver |
 //! | --- | --- | --- | --- | --- |
-//! | 0.2 (the renderer's irradiance) | 14 | 0.6–1 % | 21 % | 60–100 |
+//! | 0.2 (near the renderer's 0.15) | 14 | 0.6–1 % | 21 % | 60–100 |
 //! | 0.05 (default) | 24 (default) | 0.2–0.3 % | 0.7–4 % | 220–300 |
 //! | 0.05, `cut.light_offset` 4 (the renderer's glossy) | 24 | 0.1–0.2 % | 0.8–1.9 % | 230–350 |
 //! | 0.01 | 32 | 0.1 % | 0.5–1.3 % | 550–1000 |
@@ -90,6 +90,9 @@ use crate::tree::Tree;
 /// normalised; others are an error naming the receiver.
 pub const NORMAL_SLACK: f32 = 1e-2;
 
+/// The most worker threads [`GatherOptions::threads`] takes.
+pub const MAX_THREADS: usize = 4096;
+
 /// How the receivers given are grouped into packets of 16.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ReceiverOrder {
@@ -102,7 +105,9 @@ pub enum ReceiverOrder {
     Coherent,
 }
 
-/// Settings of a [`Gather`]. The defaults are the renderer's.
+/// Settings of a [`Gather`]. The defaults (Ω 0.05, N 24) are finer than
+/// the renderer's irradiance gathers (Ω 0.15, N 14): a library call has no
+/// image to hide its error in (the table above).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GatherOptions {
     /// The cut's parameters: Ω, the hybrid threshold, the instruction-set path.
@@ -118,6 +123,10 @@ pub struct GatherOptions {
     /// What a receiver sees where the cut leaves its hemisphere open (the
     /// microbuffer's uncovered pixels); `None`: black.
     pub environment: Option<Arc<Environment>>,
+    /// Worker threads of the gather's own pool; `None`: rayon's pool the
+    /// call runs in (the global one, or the caller's `install`). The
+    /// results are the same bits for any count.
+    pub threads: Option<usize>,
 }
 
 impl Default for GatherOptions {
@@ -128,6 +137,7 @@ impl Default for GatherOptions {
             scheme: SchemeChoice::Auto,
             order: ReceiverOrder::Unordered,
             environment: None,
+            threads: None,
         }
     }
 }
@@ -197,12 +207,35 @@ pub struct Gather<'t> {
     path: GatherPath,
     /// The scene along short rays, where leaves are too near to stand for it.
     near: Option<&'t dyn NearField>,
+    /// The pool of [`GatherOptions::threads`].
+    pool: Option<Arc<rayon::ThreadPool>>,
 }
 
 impl<'t> Gather<'t> {
     /// A gather over `tree`. Errors: an Ω out of range, an instruction-set
-    /// path this CPU does not run, a microbuffer resolution out of range.
+    /// path this CPU does not run, a microbuffer resolution or a thread
+    /// count out of range.
     pub fn new(tree: &'t Tree, opts: &GatherOptions) -> Result<Self, Error> {
+        let pool = match opts.threads {
+            None => None,
+            Some(n @ 1..=MAX_THREADS) => Some(Arc::new(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|_| Error::InvalidParameter {
+                        name: "threads",
+                        value: n.to_string(),
+                        expected: "a count the system can start",
+                    })?,
+            )),
+            Some(n) => {
+                return Err(Error::InvalidParameter {
+                    name: "threads",
+                    value: n.to_string(),
+                    expected: "1 to 4096",
+                });
+            }
+        };
         let traversal = Traversal::new(tree, opts.cut)?;
         let proto = MicroBuffer::new(opts.microbuffer)?.with_environment(opts.environment.clone());
         let scheme = opts.scheme.resolve(LANES);
@@ -222,6 +255,7 @@ impl<'t> Gather<'t> {
             opts: opts.clone(),
             path,
             near: None,
+            pool,
         })
     }
 
@@ -282,6 +316,19 @@ impl<'t> Gather<'t> {
         r: &Checked,
         what: Convolution,
         finish: impl Fn(usize, Vec3, &MicroBuffer) -> T + Sync,
+    ) -> Result<Vec<T>, Error> {
+        match &self.pool {
+            Some(pool) => pool.install(|| self.run_here(r, what, &finish)),
+            None => self.run_here(r, what, &finish),
+        }
+    }
+
+    /// [`run`](Self::run) on the current rayon pool.
+    fn run_here<T: Send + Copy + Default>(
+        &self,
+        r: &Checked,
+        what: Convolution,
+        finish: &(impl Fn(usize, Vec3, &MicroBuffer) -> T + Sync),
     ) -> Result<Vec<T>, Error> {
         let order: Vec<u32> = match self.opts.order {
             ReceiverOrder::Unordered => order::morton(r.receivers.iter().map(|x| x.position())),

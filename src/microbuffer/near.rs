@@ -26,7 +26,7 @@ pub const NEAR_RADII: f32 = 2.0;
 
 /// What lies along short rays from a receiver: the scene itself, which the
 /// surfels only stand for. Implemented by the renderer over its ray tracer
-/// ([`NearRays`](crate::render::NearRays)).
+/// (`render::NearRays`).
 ///
 /// ```
 /// use glam::Vec3;

@@ -37,6 +37,8 @@ pub(super) fn gather_options(
         scheme,
         order: ReceiverOrder::Coherent,
         environment: environment.clone(),
+        // The renderer's pool.
+        threads: None,
     }
 }
 

@@ -251,7 +251,7 @@ impl Lights {
     /// area-light samples plus every point and directional light, where `f`
     /// is the BRDF for incident direction `ωi`. The area samples are points
     /// `first..first + samples` of the scrambled (0,2)-sequence
-    /// [`sobol2`]: stratified over the lights' total area, and with the
+    /// `sobol2`: stratified over the lights' total area, and with the
     /// samples of the other camera samples of a pixel (the next indices).
     #[allow(clippy::too_many_arguments)]
     pub fn reflected(

@@ -176,11 +176,11 @@ const FEW_DIRECT_SAMPLES: u32 = 2;
 
 /// The default curves: `base` (what `pbgi render` uses) at every `spp` and
 /// 2× and 4× the last, Ω 0.4× the base's at the higher ones, dense gathers
-/// at the lower ones, and the coarse gather [`COARSE`] at the base's, where
-/// the base is finer; from [`LATE_MIN_SPP`] on, the base's Ω at N
-/// [`MEDIUM_MICROBUFFER`], and with `emitters` (area lights:
+/// at the lower ones, and the coarse gather `COARSE` at the base's, where
+/// the base is finer; from `LATE_MIN_SPP` on, the base's Ω at N
+/// `MEDIUM_MICROBUFFER`, and with `emitters` (area lights:
 /// `Scene::has_emitters`) the base and the coarse gather again at
-/// [`FEW_DIRECT_SAMPLES`] per camera sample: a pixel's light
+/// `FEW_DIRECT_SAMPLES` per camera sample: a pixel's light
 /// noise falls with its light samples whichever camera sample takes them,
 /// its edges' noise only with camera samples (the nave at 32 spp × 2 is at
 /// 2.95 % where 16 × 8 is at 3.41 %, in the same time).

@@ -13,7 +13,7 @@
 //! outwards to `f32`; every operation is homogeneous in the coordinates, so
 //! scaling the input by `2^k` scales the tree's spheres by exactly `2^k`.
 //!
-//! [`file`] writes the surfels and their tree to a `.pbgi` file and reads it
+//! [`file`](mod@file) writes the surfels and their tree to a `.pbgi` file and reads it
 //! back, checked whole, so a render can skip building them.
 
 use glam::Vec3;
