@@ -180,6 +180,10 @@ fn transfer_towards<V: Real>(m: [V; 3], w: [V; 3], l2: V, n: [V; 3]) -> V {
     let facing = (-(m[0] * w[0] + m[1] * w[1] + m[2] * w[2])).max_of(zero);
     let cos = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]).max_of(zero);
     let g = facing * cos / l2;
+    // Inputs are checked finite where they enter (surfels, receivers), so
+    // `g` is non-finite only where `l2` is 0 or underflows (a node centred
+    // on the receiver, which sends it nothing): geometry, not a defect
+    // that a NaN check downstream should see.
     V::select(zero.lt(l2) & zero.le(g) & g.lt(V::splat(f32::INFINITY)), g, zero)
 }
 
