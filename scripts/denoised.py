@@ -41,7 +41,13 @@ import drjit as dr  # noqa: E402  (after the variant)
 
 
 def load(xml, bounces):
-    return mi.load_file(xml, max_depth=bounces + 2, rfilter="box")
+    """The scene with max_depth = bounces + 2, and a box pixel filter where
+    the file takes it as a parameter (Mitsuba refuses unused ones)."""
+    params = {"max_depth": bounces + 2}
+    with open(xml) as f:
+        if 'name="rfilter"' in f.read():
+            params["rfilter"] = "box"
+    return mi.load_file(xml, **params)
 
 
 def denoise(rgb):
