@@ -357,7 +357,7 @@ fn the_cli_bounds_its_numbers_and_names_a_missing_file() {
         "{err}"
     );
     let (_, err) = run(&["render", dir.to_str().unwrap()]);
-    assert!(err.contains("a folder, not a scene file"), "{err}");
+    assert!(err.contains("a folder, not a regular file"), "{err}");
     // A name that is no scene still lists the scenes.
     let (_, err) = run(&["render", "cornel-box"]);
     assert!(

@@ -38,7 +38,9 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
     if path.is_dir() {
         return Err(SceneError::Io {
             path: path.to_path_buf(),
-            message: "a folder, not a scene file (expected .xml, .obj, .ply, .off, .gltf or .glb)".into(),
+            message:
+                "a folder, not a regular file (a scene is an .xml, .obj, .ply, .off, .gltf or .glb file)"
+                    .into(),
         });
     }
     let ext = path
