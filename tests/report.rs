@@ -490,19 +490,13 @@ fn the_cli_report_runs_end_to_end() {
     // the same image twice has none.
     let reference = out_dir.join("reference.exr");
     let r = reference.to_str().unwrap();
-    let (ok, text) = run(&[
-        scene_s,
-        "--reference",
-        r,
-        "--reference",
-        r,
-        "--out",
-        out_s,
-        "--spp",
-        "1",
-        "--path-tracer-spp",
-        "4",
-    ]);
+    // A one-point sweep with `extra` options.
+    let small = |extra: &[&str]| {
+        let mut args = vec![scene_s, "--out", out_s, "--spp", "1", "--path-tracer-spp", "4"];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let (ok, text) = small(&["--reference", r, "--reference", r]);
     assert!(ok, "{text}");
     let md = std::fs::read_to_string(out_dir.join("error.md")).unwrap();
     assert!(
@@ -523,21 +517,7 @@ fn the_cli_report_runs_end_to_end() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let list = dn.join("denoised.csv");
     std::fs::write(&list, "label,spp,seconds,image\n\"a denoiser\",4,0.5,pt-4.exr\n").unwrap();
-    let report_with = |list: &Path| {
-        run(&[
-            scene_s,
-            "--reference",
-            r,
-            "--out",
-            out_s,
-            "--spp",
-            "1",
-            "--path-tracer-spp",
-            "4",
-            "--denoised",
-            list.to_str().unwrap(),
-        ])
-    };
+    let report_with = |list: &Path| small(&["--reference", r, "--denoised", list.to_str().unwrap()]);
     let (ok, text) = report_with(&list);
     assert!(ok, "{text}");
     assert!(
