@@ -10,19 +10,29 @@ use crate::common;
 
 use std::path::PathBuf;
 
-use pbgi::render::{RenderOptions, render};
+use pbgi::render::{ReferenceOptions, RenderOptions, render, render_reference};
+use pbgi::report::{compare, emitter_mask};
 use pbgi::scene::formats::read_obj;
 use pbgi::scene::resolve_in;
 use pbgi::scene::{Light, Scene, SceneError, available_scenes_in, builtin, catalogue, nave};
 
-/// A tiny, quick render: no NaN, not black.
+/// How far a tiny render's mean may lie from the path tracer's, over the
+/// pixels that see no emitter: a light, a material or a bounce counted
+/// twice or lost moves it by tens of percent. Measured at 24 pixels
+/// across, 16 spp, density 300: the Cornell box −0.1 %, the nave +1.1 %
+/// (its full frame's bias), the glossy box −7.6 % (not yet explained).
+const MEAN_SLACK: f64 = 0.1;
+
+/// A tiny, quick render: no NaN, not black, and its mean within
+/// [`MEAN_SLACK`] of the path tracer's (a tenfold over-bright image passed
+/// the old check, a mean above 0.01).
 fn renders(mut scene: Scene, density: f32) {
     scene.validate().unwrap_or_else(|e| panic!("{}: {e}", scene.name));
     let aspect = scene.camera.height as f32 / scene.camera.width as f32;
     scene.camera.width = 24;
     scene.camera.height = ((24.0 * aspect) as u32).max(8);
     let opts = RenderOptions {
-        spp: 1,
+        spp: 16,
         density,
         ..Default::default()
     };
@@ -36,7 +46,21 @@ fn renders(mut scene: Scene, density: f32) {
     let mean = px.iter().map(|p| p.element_sum() / 3.0).sum::<f32>() / px.len() as f32;
     assert!(mean > 0.01, "{}: mean {mean} is black", scene.name);
     assert!(out.surfels > 0, "{}: no surfels", scene.name);
-    eprintln!("{}: mean radiance {mean:.3}, {} surfels", scene.name, out.surfels);
+    // As bright as the path tracer says, over the pixels that see no
+    // emitter ([`MEAN_SLACK`]).
+    let reference = render_reference(&scene, &ReferenceOptions::default(), &|_, _| {})
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+    let c = compare(&out.image, &reference.image, &emitter_mask(&scene)).unwrap();
+    eprintln!(
+        "{}: mean radiance {mean:.4}, bias {:+.4} against the path tracer, {} surfels",
+        scene.name, c.bias, out.surfels
+    );
+    assert!(
+        c.bias.abs() < MEAN_SLACK,
+        "{}: bias {:+.4} against the path tracer",
+        scene.name,
+        c.bias
+    );
 }
 
 #[test]
