@@ -27,14 +27,37 @@ pub const FETCHED: [&str; 5] = [
 #[cfg(feature = "formats")]
 pub const SCENE_DIR_ENV: &str = "PBGI_SCENE_DIR";
 
-/// The scene folder: `$PBGI_SCENE_DIR` when set and not empty, else `scenes/`
-/// in the repository this library was built from (where the script puts it).
+/// The scene folder: `$PBGI_SCENE_DIR` when set and not empty; else
+/// `scenes/` in the repository this library was built from, while that
+/// folder exists (a clone, where `scripts/fetch-scenes.sh` puts them); else,
+/// for an installed binary whose build tree is gone, the user's data
+/// folder: `$XDG_DATA_HOME/pbgi/scenes` or `~/.local/share/pbgi/scenes`
+/// (`%APPDATA%\pbgi\scenes` on Windows).
 #[cfg(feature = "formats")]
 pub fn scene_dir() -> PathBuf {
-    match std::env::var_os(SCENE_DIR_ENV) {
-        Some(d) if !d.is_empty() => PathBuf::from(d),
-        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
-    }
+    let var = |name: &str| {
+        std::env::var_os(name)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    let repository = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    choose_scene_dir(
+        var(SCENE_DIR_ENV),
+        repository.is_dir().then_some(repository),
+        var("XDG_DATA_HOME")
+            .or_else(|| var("HOME").map(|h| h.join(".local/share")))
+            .or_else(|| var("APPDATA")),
+    )
+}
+
+/// [`scene_dir`]'s choice among the folder named in the environment, the
+/// repository's (if it exists) and the user's data folder.
+#[cfg(feature = "formats")]
+fn choose_scene_dir(named: Option<PathBuf>, repository: Option<PathBuf>, data: Option<PathBuf>) -> PathBuf {
+    named
+        .or(repository)
+        .or_else(|| data.map(|d| d.join("pbgi").join("scenes")))
+        .unwrap_or_else(|| PathBuf::from("scenes"))
 }
 
 /// The files scene `name` needs, relative to the scene folder (`None` for an unknown name).
@@ -165,4 +188,29 @@ pub fn available_scenes_in(dir: &std::path::Path) -> Vec<String> {
     let mut names: Vec<String> = builtin::NAMES.iter().map(|s| s.to_string()).collect();
     names.extend(available_in(dir));
     names
+}
+
+#[cfg(all(test, feature = "formats"))]
+mod tests {
+    use super::*;
+
+    /// The environment's folder first, then the repository's while it
+    /// exists, then the user's data folder, then `scenes/` here.
+    #[test]
+    fn an_installed_binary_looks_in_the_user_s_data_folder() {
+        let p = |s: &str| Some(PathBuf::from(s));
+        assert_eq!(
+            choose_scene_dir(p("/e"), p("/repo/scenes"), p("/d")),
+            PathBuf::from("/e")
+        );
+        assert_eq!(
+            choose_scene_dir(None, p("/repo/scenes"), p("/d")),
+            PathBuf::from("/repo/scenes")
+        );
+        assert_eq!(
+            choose_scene_dir(None, None, p("/d")),
+            PathBuf::from("/d/pbgi/scenes")
+        );
+        assert_eq!(choose_scene_dir(None, None, None), PathBuf::from("scenes"));
+    }
 }

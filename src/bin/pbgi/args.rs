@@ -227,7 +227,7 @@ pub fn parse_choices(names: &[String]) -> Res<Vec<SchemeChoice>> {
 /// SCENE's help: the names (see `pbgi scenes` for which are present).
 const SCENE_HELP: &str = "Scene: built-in cornell-box, cornell-box-glossy, nave (procedural, stands in for Sibenik); \
 after scripts/fetch-scenes.sh also bunny, bunny-glossy, sponza, sponza-bump, cornell-box-embree \
-(read from $PBGI_SCENE_DIR, default scenes/ in the repository); or a Mitsuba XML / OBJ / PLY / OFF / glTF (.gltf, .glb) file";
+(read from $PBGI_SCENE_DIR, else scenes/ in the repository, else ~/.local/share/pbgi/scenes); or a Mitsuba XML / OBJ / PLY / OFF / glTF (.gltf, .glb) file";
 
 #[derive(Args, Clone)]
 pub struct ReferenceArgs {
