@@ -9,7 +9,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::bake::{BakeOptions, bake};
-use super::bounces::{SURFEL_GROUP, gather_bounce};
+use super::bounces::gather_bounce;
 use super::light::Lights;
 use super::options::{Gathers, RenderOptions};
 use super::output::{RenderError, Stage};
@@ -158,20 +158,13 @@ pub(super) fn build(
         if opts.bounces == 0 {
             cloud = dark;
         } else {
-            cloud = gather_bounce(
-                &dark,
-                &direct,
-                &baked.albedo,
-                &Tree::build(&dark),
-                &gopts,
-                SURFEL_GROUP,
-            )?;
+            cloud = gather_bounce(&dark, &direct, &baked.albedo, &Tree::build(&dark), &gopts)?;
             direct = cloud.surfels().iter().map(|s| s.radiance).collect();
         }
     }
     let mut tree = Tree::build(&cloud);
     for _ in 1..opts.bounces.max(1) {
-        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts, SURFEL_GROUP)?;
+        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts)?;
         tree = Tree::build(&cloud);
     }
     stages.push(Stage {

@@ -17,48 +17,31 @@ use crate::tree::{NodeId, Tree};
 /// 5.04 % (bias −1.36 % against −1.30 %), the atrium 1.71 s against 3.38 s
 /// at 8.23 % against 8.19 %, the Cornell box at `--bounces 2` 1.53 s
 /// against 3.86 s at 2.02 % against 2.01 % (docs/lab/gather-cost.md).
-pub(super) const SURFEL_GROUP: usize = 8;
+const SURFEL_GROUP: usize = 8;
 
 /// Cosine of the widest normal cone a group of surfels sharing one gather
 /// may have (18°, as the sparse lattice's one surface).
 const FLAT: f32 = 0.95;
 
 /// One more bounce at the surfels: each surfel's radiance becomes its direct
-/// part plus `albedo/π · E`, with `E` gathered from the current cloud,
-/// once per group of at most `group` surfels (a subtree of `tree` whose
-/// normals lie within [`FLAT`]'s cone, gathered at its centroid), or at
-/// every surfel with `group` 1.
+/// part plus `albedo/π · E`, with `E` gathered from the current cloud once
+/// per group of at most [`SURFEL_GROUP`] surfels (a subtree of `tree` whose
+/// normals lie within [`FLAT`]'s cone, gathered at its centroid).
 pub(super) fn gather_bounce(
     cloud: &PointCloud,
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
     opts: &GatherOptions,
-    group: usize,
 ) -> Result<PointCloud, Error> {
     let gather = Gather::new(tree, opts)?;
     let surfels = cloud.surfels();
-    let (receivers, members) = if group <= 1 {
-        // The receivers sit a hair above their surfel so it does not see itself edge-on.
-        let r = surfels
-            .iter()
-            .map(|s| (s.position + s.normal * (s.radius * 1e-3), s.normal))
-            .collect();
-        (r, None)
-    } else {
-        let (r, m) = groups(tree, surfels, group);
-        (r, Some(m))
-    };
+    let (receivers, members) = groups(tree, surfels, SURFEL_GROUP);
     let gathered = gather.irradiance(&receivers)?;
     let mut e = vec![Vec3::ZERO; surfels.len()];
-    match members {
-        None => e = gathered,
-        Some(members) => {
-            for (g, m) in gathered.iter().zip(&members) {
-                for &i in m {
-                    e[i as usize] = *g;
-                }
-            }
+    for (g, m) in gathered.iter().zip(&members) {
+        for &i in m {
+            e[i as usize] = *g;
         }
     }
     let next: Vec<Surfel> = surfels
@@ -90,6 +73,7 @@ fn groups(tree: &Tree, surfels: &[Surfel], group: usize) -> (Vec<(Vec3, Vec3)>, 
             collect(tree, n, &mut m);
             let normal = v.normal.normalize_or(v.cone_axis);
             let r = m.iter().map(|&i| surfels[i as usize].radius).sum::<f32>() / m.len() as f32;
+            // A hair above the surface, so it does not see itself edge-on.
             receivers.push((v.centroid + normal * (r * 1e-3), normal));
             members.push(m);
         } else if let Some(l) = v.children {

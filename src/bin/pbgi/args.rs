@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use pbgi::gather::MAX_THREADS;
 use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
@@ -380,7 +381,6 @@ const MAX_REFERENCE_SPP: u32 = 1 << 24;
 const MAX_DIRECT_SAMPLES: u32 = 4_096;
 const MAX_BOUNCES: u32 = 64;
 const MAX_SURFELS: u32 = 200_000_000;
-const MAX_THREADS: usize = 4_096;
 
 /// A `u32` option within `lo..=hi`: clap names the bound on a value
 /// outside it (a negative one included).
@@ -388,7 +388,7 @@ fn bounded_u32(lo: u32, hi: u32) -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(i64::from(lo)..=i64::from(hi))
 }
 
-/// `--threads`: 1 to [`MAX_THREADS`].
+/// `--threads`: 1 to [`MAX_THREADS`], the gather's own bound.
 fn threads(s: &str) -> Result<usize, String> {
     match s.trim().parse::<i64>() {
         Ok(n) if (1..=MAX_THREADS as i64).contains(&n) => Ok(n as usize),
