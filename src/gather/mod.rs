@@ -68,6 +68,7 @@
 //! convolutions of its own.
 
 mod order;
+pub(crate) use order::morton_codes;
 mod packets;
 
 use std::fmt;

@@ -19,22 +19,27 @@ fn spread(x: u64) -> u64 {
 /// positions' bounding box (21 bits an axis); ties keep input order, so the
 /// order is a function of the positions alone.
 pub(super) fn morton(positions: impl ExactSizeIterator<Item = Vec3> + Clone) -> Vec<u32> {
+    let mut keys: Vec<(u64, u32)> = morton_codes(positions).zip(0..).collect();
+    keys.sort_unstable();
+    keys.into_iter().map(|(_, i)| i).collect()
+}
+
+/// The Morton (Z-order) code of each of `positions` over their bounding box,
+/// 21 bits an axis.
+pub(crate) fn morton_codes(
+    positions: impl ExactSizeIterator<Item = Vec3> + Clone,
+) -> impl ExactSizeIterator<Item = u64> {
     let (lo, hi) = positions
         .clone()
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(p), hi.max(p))
         });
     let scale = ((1u32 << 21) - 1) as f32 / (hi - lo).max_element().max(f32::MIN_POSITIVE);
-    let mut keys: Vec<(u64, u32)> = positions
-        .enumerate()
-        .map(|(i, p)| {
-            // In [0, 2²¹): the cast saturates, so rounding cannot overflow.
-            let q = ((p - lo) * scale).to_array().map(|c| c as u64);
-            (spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2, i as u32)
-        })
-        .collect();
-    keys.sort_unstable();
-    keys.into_iter().map(|(_, i)| i).collect()
+    positions.map(move |p| {
+        // In [0, 2²¹): the cast saturates, so rounding cannot overflow.
+        let q = ((p - lo) * scale).to_array().map(|c| c as u64);
+        spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2
+    })
 }
 
 #[cfg(test)]

@@ -1,5 +1,7 @@
 //! Baking a scene into surfels: stratified area-uniform sampling of every
-//! surface and direct light at each surfel through shadow rays.
+//! surface (triangles smaller than a surfel pooled, so the count follows the
+//! density, not the triangles) and direct light at each surfel through
+//! shadow rays.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -7,6 +9,7 @@ use rayon::prelude::*;
 use super::light::{Lights, triangle};
 use super::trace::Tracer;
 use crate::error::{Error, Invalid};
+use crate::gather::morton_codes;
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
 use crate::rng::{Rng, mix};
 use crate::scene::Scene;
@@ -49,10 +52,228 @@ fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
     Vec2::new(x, y)
 }
 
+/// A triangle's place: its mesh and its index there.
+type TriangleRef = (u32, u32);
+
+/// The triangles of one material too small for a surfel of their own (less
+/// than one surfel's area at the density), sampled together by area: the
+/// budget holds however finely a surface is cut. Ordered by the axis they
+/// face most (so a surfel never averages the two sides of a thin part)
+/// and then along a Morton curve, surfel `k` of `count` stands for the
+/// `k`-th equal share of their summed area: a compact patch of neighbours.
+struct Pool {
+    material: usize,
+    triangles: Vec<TriangleRef>,
+    /// The summed area at each triangle's end.
+    ends: Vec<f64>,
+    count: u32,
+    scramble: u32,
+}
+
+impl Pool {
+    fn area(&self) -> f64 {
+        self.ends.last().copied().unwrap_or(0.0)
+    }
+
+    /// The point at summed area `x` (in `[0, area)`), `w` the second
+    /// coordinate across its triangle, with that triangle's normal.
+    fn point(&self, scene: &Scene, x: f64, w: f32) -> (Vec3, Vec3) {
+        let t = self.ends.partition_point(|&e| e <= x).min(self.ends.len() - 1);
+        let start = if t == 0 { 0.0 } else { self.ends[t - 1] };
+        let (v, twice_area, normal) = vertices(scene, self.triangles[t]);
+        // The fraction of the triangle's area swept from its first vertex
+        // is the square of the first coordinate of the area-preserving map.
+        let u = ((x - start) / (0.5 * twice_area as f64)).clamp(0.0, 1.0) as f32;
+        (on_triangle(v, u, w), normal)
+    }
+
+    /// Surfel `k`: a point at the middle of its share, the area-weighted
+    /// normal of the share, and the radius of a disk of the share's area.
+    fn site(&self, scene: &Scene, k: u32) -> (Vec3, Vec3, f32) {
+        let share = self.area() / self.count as f64;
+        let (lo, hi) = (k as f64 * share, (k + 1) as f64 * share);
+        let mut t = self.ends.partition_point(|&e| e <= lo);
+        let mut sum = Vec3::ZERO;
+        while t < self.ends.len() {
+            let start = if t == 0 { 0.0 } else { self.ends[t - 1] };
+            if start >= hi {
+                break;
+            }
+            let overlap = self.ends[t].min(hi) - start.max(lo);
+            sum += vertices(scene, self.triangles[t]).2 * overlap as f32;
+            t += 1;
+        }
+        let w = (k.reverse_bits() ^ self.scramble) as f32 * (1.0 / 4_294_967_296.0);
+        let (position, own) = self.point(scene, (k as f64 + 0.5) * share, w);
+        let normal = sum.try_normalize().unwrap_or(own);
+        let radius = (share / std::f64::consts::PI).sqrt() as f32;
+        (position, normal, radius)
+    }
+}
+
+/// The vertices, twice the area and the unit normal of a triangle known to
+/// be one ([`triangle`] gave `Some` for it).
+fn vertices(scene: &Scene, (mesh, t): TriangleRef) -> ([Vec3; 3], f32, Vec3) {
+    let mesh = &scene.meshes[mesh as usize];
+    let v = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
+    let (twice_area, normal) = triangle(v).expect("pooled triangles have an area");
+    (v, twice_area, normal)
+}
+
+/// The point of triangle `v` at `(u, w)` of the unit square, mapped
+/// area-preservingly.
+fn on_triangle(v: [Vec3; 3], u: f32, w: f32) -> Vec3 {
+    let su = u.sqrt();
+    let (b0, b1) = (1.0 - su, w * su);
+    v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
+}
+
+/// Which of six directions (+x, +y, +z, −x, −y, −z: neighbours in this
+/// order are never opposite) a normal faces most.
+fn facing(n: Vec3) -> u8 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    axis + if n[axis as usize] < 0.0 { 3 } else { 0 }
+}
+
+/// Position, normal, radius and material of a surfel of a large triangle.
+type Own = (Vec3, Vec3, f32, usize);
+
+/// A surfel: a large triangle's, or the `k`-th of a pool.
+#[derive(Clone, Copy)]
+enum Site {
+    Own(Own),
+    Pooled { pool: usize, k: u32 },
+}
+
+/// Where the surfels go: one or more on each triangle of at least a
+/// surfel's area, and the pools of the smaller ones.
+struct Sites {
+    own: Vec<Own>,
+    pools: Vec<Pool>,
+}
+
+fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
+    // Per triangle, twice its area and its normal (`None`: no area).
+    let shapes: Vec<Vec<Option<(f32, Vec3)>>> = scene
+        .meshes
+        .iter()
+        .map(|m| {
+            m.triangles
+                .par_iter()
+                .map(|t| triangle(t.map(|i| m.positions[i as usize])))
+                .collect()
+        })
+        .collect();
+    let density = opts.density as f64;
+    let mut expected = scene.materials.len() as f64;
+    for shape in shapes.iter().flatten().flatten() {
+        expected += 0.5 * shape.0 as f64 * density;
+    }
+    if expected > PointCloud::MAX_SURFELS as f64 {
+        return Err(Error::TooManySurfels {
+            count: expected.min(usize::MAX as f64) as usize,
+            max: PointCloud::MAX_SURFELS,
+        });
+    }
+    // Per large triangle, a count from its area (stochastic rounding),
+    // stratified with a scrambled Hammersley set mapped area-preservingly.
+    let mut own = Vec::new();
+    let mut small: Vec<Vec<TriangleRef>> = vec![Vec::new(); scene.materials.len()];
+    let mut tri_seed = Rng::new(opts.seed);
+    for (m, (mesh, shape)) in scene.meshes.iter().zip(&shapes).enumerate() {
+        for (t, (tri, shape)) in mesh.triangles.iter().zip(shape).enumerate() {
+            let Some((twice_area, normal)) = *shape else {
+                continue;
+            };
+            let area = 0.5 * twice_area;
+            let want = area * opts.density;
+            if want < 1.0 {
+                small[mesh.material].push((m as u32, t as u32));
+                continue;
+            }
+            let v = tri.map(|i| mesh.positions[i as usize]);
+            let extra = if tri_seed.f32() < want.fract() { 1.0 } else { 0.0 };
+            let n = (want.floor() + extra) as u32;
+            // In f64: the radius of a tiny triangle's disk must not underflow.
+            let radius = (area as f64 / (n as f64 * std::f64::consts::PI)).sqrt() as f32;
+            let scramble = tri_seed.next_u64() as u32;
+            for i in 0..n {
+                let u = hammersley(i, n, scramble);
+                own.push((on_triangle(v, u.x, u.y), normal, radius, mesh.material));
+            }
+        }
+    }
+    let pools = small
+        .into_iter()
+        .enumerate()
+        .filter(|(_, triangles)| !triangles.is_empty())
+        .map(|(material, triangles)| pool(scene, &shapes, material, triangles, opts))
+        .collect();
+    Ok(Sites { own, pools })
+}
+
+/// The pool of `material`'s small `triangles`: ordered, summed, counted.
+fn pool(
+    scene: &Scene,
+    shapes: &[Vec<Option<(f32, Vec3)>>],
+    material: usize,
+    triangles: Vec<TriangleRef>,
+    opts: &BakeOptions,
+) -> Pool {
+    let centroid = |&(m, t): &TriangleRef| {
+        let mesh = &scene.meshes[m as usize];
+        mesh.triangles[t as usize]
+            .iter()
+            .map(|&i| mesh.positions[i as usize])
+            .sum::<Vec3>()
+            / 3.0
+    };
+    let codes = morton_codes(triangles.iter().map(centroid));
+    let mut keyed: Vec<(u8, u64, TriangleRef)> = triangles
+        .iter()
+        .zip(codes)
+        .map(|(&r, code)| {
+            let (_, normal) = shapes[r.0 as usize][r.1 as usize].expect("pooled triangles have an area");
+            (facing(normal), code, r)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    let mut sum = 0.0f64;
+    let mut ends = Vec::with_capacity(keyed.len());
+    for &(_, _, (m, t)) in &keyed {
+        sum += 0.5 * shapes[m as usize][t as usize].map_or(0.0, |s| s.0) as f64;
+        ends.push(sum);
+    }
+    let mut rng = Rng::new(mix(
+        opts.seed ^ (material as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+    ));
+    let want = sum * opts.density as f64;
+    let count = want.floor() as u32 + u32::from((rng.f32() as f64) < want.fract());
+    Pool {
+        material,
+        triangles: keyed.into_iter().map(|(_, _, r)| r).collect(),
+        ends,
+        count,
+        scramble: rng.next_u64() as u32,
+    }
+}
+
 /// Samples the surfels of `scene` and lights them directly (`scene` valid,
-/// see [`Scene::validate`]). Errors: a density that is not a finite positive
-/// number, or one that asks for more than [`PointCloud::MAX_SURFELS`] surfels
-/// (counted before anything is allocated).
+/// see [`Scene::validate`]). A triangle of at least a surfel's area gets
+/// surfels of its own; smaller ones share theirs, each surfel standing for
+/// an equal share of their area (its normal their average over it, its
+/// light the average of its light samples spread over it), so the count is
+/// the density's whatever the number of triangles. Errors: a density that
+/// is not a finite positive number, or one that asks for more than
+/// [`PointCloud::MAX_SURFELS`] surfels (counted before anything is
+/// allocated).
 pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Result<Baked, Error> {
     if !(opts.density.is_finite() && opts.density > 0.0) {
         return Err(Error::InvalidParameter {
@@ -61,58 +282,44 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
             expected: "a finite number > 0 (surfels per unit area)",
         });
     }
-    let mut expected = 0.0f64;
-    for m in &scene.meshes {
-        for t in &m.triangles {
-            if let Some((twice_area, _)) = triangle(t.map(|i| m.positions[i as usize])) {
-                expected += (0.5 * twice_area as f64 * opts.density as f64).max(1.0);
-            }
-        }
-    }
-    if expected > PointCloud::MAX_SURFELS as f64 {
-        return Err(Error::TooManySurfels {
-            count: expected.min(usize::MAX as f64) as usize,
-            max: PointCloud::MAX_SURFELS,
-        });
-    }
-    // Per triangle, a count from its area (stochastic rounding), stratified
-    // with a scrambled Hammersley set mapped area-preservingly to the triangle.
-    let mut sites: Vec<(Vec3, Vec3, f32, usize)> = Vec::new();
-    let mut tri_seed = Rng::new(opts.seed);
-    for mesh in &scene.meshes {
-        for t in &mesh.triangles {
-            let v = t.map(|i| mesh.positions[i as usize]);
-            let Some((twice_area, normal)) = triangle(v) else {
-                continue;
-            };
-            let area = 0.5 * twice_area;
-            let want = area * opts.density;
-            let extra = if tri_seed.f32() < want.fract() { 1.0 } else { 0.0 };
-            let n = (want.floor() + extra).max(1.0) as u32;
-            // In f64: the radius of a tiny triangle's disk must not underflow.
-            let radius = (area as f64 / (n as f64 * std::f64::consts::PI)).sqrt() as f32;
-            let scramble = tri_seed.next_u64() as u32;
-            for i in 0..n {
-                let u = hammersley(i, n, scramble);
-                let su = u.x.sqrt();
-                let (b0, b1) = (1.0 - su, u.y * su);
-                let p = v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1);
-                sites.push((p, normal, radius, mesh.material));
-            }
-        }
-    }
-    let baked: Vec<Option<(Surfel, Vec3)>> = sites
+    let Sites { own, pools } = sites(scene, opts)?;
+    let pooled = pools
+        .iter()
+        .enumerate()
+        .flat_map(|(pool, p)| (0..p.count).map(move |k| Site::Pooled { pool, k }));
+    let all: Vec<Site> = own.iter().map(|&s| Site::Own(s)).chain(pooled).collect();
+    let baked: Vec<Option<(Surfel, Vec3)>> = all
         .par_iter()
         .enumerate()
-        .map(|(i, &(position, normal, radius, material))| {
+        .map(|(i, &site)| {
+            let (position, normal, radius, material) = match site {
+                Site::Own(s) => s,
+                Site::Pooled { pool, k } => {
+                    let (position, normal, radius) = pools[pool].site(scene, k);
+                    (position, normal, radius, pools[pool].material)
+                }
+            };
             let albedo = scene.materials[material].albedo;
             let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let f = albedo * std::f32::consts::FRAC_1_PI;
-            let radiance = if albedo.max_element() > 0.0 {
-                let scramble = [h as u32, (h >> 32) as u32];
-                lights.reflected(tracer, position, normal, opts.light_samples, 0, scramble, |_| f)
-            } else {
+            let scramble = [h as u32, (h >> 32) as u32];
+            let radiance = if albedo.max_element() <= 0.0 {
                 Vec3::ZERO
+            } else if let Site::Pooled { pool, k } = site {
+                // One light sample at each of points spread over the share.
+                let pool = &pools[pool];
+                let spread = opts.light_samples.max(1);
+                let share = pool.area() / pool.count as f64;
+                let mut sum = Vec3::ZERO;
+                for j in 0..spread {
+                    let x = (k as f64 + (j as f64 + 0.5) / spread as f64) * share;
+                    let w = (j.reverse_bits() ^ scramble[1]) as f32 * (1.0 / 4_294_967_296.0);
+                    let (at, n) = pool.point(scene, x, w);
+                    sum += lights.reflected(tracer, at, n, opts.light_samples.min(1), j, scramble, |_| f);
+                }
+                sum / spread as f32
+            } else {
+                lights.reflected(tracer, position, normal, opts.light_samples, 0, scramble, |_| f)
             };
             if !radiance.is_finite() {
                 return Err(Error::InvalidSurfel {

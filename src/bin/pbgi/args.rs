@@ -322,6 +322,11 @@ pub struct RenderArgs {
     /// Render only pixels x0..x1, y0..y1 of the frame (an image of that size).
     #[arg(long, value_name = "X0,Y0,X1,Y1")]
     pub crop: Option<Crop>,
+    /// Seed of every random choice: surfel placement, light and camera
+    /// samples (two seeds give independent images; the same seed, the same
+    /// image bit for bit on any machine and thread count).
+    #[arg(long, default_value_t = RenderOptions::default().seed)]
+    pub seed: u64,
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -424,6 +429,7 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         },
         direct_samples: a.direct_samples,
         crop: a.crop,
+        seed: a.seed,
         ..a.settings.options(a.spp)?
     })
 }
