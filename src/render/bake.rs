@@ -3,6 +3,8 @@
 //! density, not the triangles) and direct light at each surfel through
 //! shadow rays.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -13,6 +15,9 @@ use crate::gather::morton_codes;
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
 use crate::rng::{Rng, mix};
 use crate::scene::Scene;
+
+/// Surfels between two progress reports.
+const TICK: usize = 4096;
 
 /// How a scene is turned into surfels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -275,6 +280,17 @@ fn pool(
 /// [`PointCloud::MAX_SURFELS`] surfels (counted before anything is
 /// allocated).
 pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Result<Baked, Error> {
+    bake_reporting(scene, tracer, lights, opts, &|_, _| {})
+}
+
+/// [`bake`], calling `tick(done, total)` as the surfels' light is done.
+pub(super) fn bake_reporting(
+    scene: &Scene,
+    tracer: &Tracer,
+    lights: &Lights,
+    opts: &BakeOptions,
+    tick: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Baked, Error> {
     if !(opts.density.is_finite() && opts.density > 0.0) {
         return Err(Error::InvalidParameter {
             name: "density",
@@ -288,6 +304,8 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
         .enumerate()
         .flat_map(|(pool, p)| (0..p.count).map(move |k| Site::Pooled { pool, k }));
     let all: Vec<Site> = own.iter().map(|&s| Site::Own(s)).chain(pooled).collect();
+    let done = AtomicUsize::new(0);
+    tick(0, all.len());
     let baked: Vec<Option<(Surfel, Vec3)>> = all
         .par_iter()
         .enumerate()
@@ -337,6 +355,10 @@ pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions)
                 radius,
                 radiance: radiance.min(Vec3::splat(MAX_RADIANCE)),
             };
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if d % TICK == 0 || d == all.len() {
+                tick(d, all.len());
+            }
             // Geometry beyond `MAX_COORDINATE` makes no surfel.
             Ok(surfel.validate(i).is_ok().then_some((surfel, albedo)))
         })

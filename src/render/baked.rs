@@ -5,14 +5,15 @@
 //! settings.
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::Vec3;
 
-use super::bake::{BakeOptions, bake};
+use super::bake::{BakeOptions, bake_reporting};
 use super::bounces::gather_bounce;
 use super::light::Lights;
 use super::options::{Gathers, RenderOptions};
-use super::output::{RenderError, Stage};
+use super::output::{PreTimings, RenderError, Report, Stage};
 use super::trace::Tracer;
 use crate::cut::SchemeChoice;
 use crate::environment::Environment;
@@ -109,15 +110,25 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
     Ok(())
 }
 
+/// What [`build`] reports as it goes: the stage names of [`Report`].
+pub(super) const TRACER: &str = "ray-tracing BVH";
+pub(super) const SURFELS: &str = "surfels + direct light";
+pub(super) const SKY: &str = "environment at surfels";
+pub(super) const BOUNCE: &str = "bounce at surfels";
+pub(super) const TREE: &str = "tree";
+
 /// Surfels with direct light, the environment's light and extra bounces
 /// gathered at them, and their tree (an empty cloud when the render needs
-/// none); `stages` gets what ran and what was left out.
+/// none); `stages` gets what ran and what was left out, `times` the seconds
+/// of each part, `report` the progress.
 pub(super) fn build(
     scene: &Scene,
     opts: &RenderOptions,
     tracer: &Tracer,
     lights: &Lights,
     stages: &mut Vec<Stage>,
+    times: &mut PreTimings,
+    report: &Report,
 ) -> Result<(PointCloud, Tree), Error> {
     let environment = environment(scene, opts);
     if !needs_points(opts, &environment) {
@@ -132,11 +143,21 @@ pub(super) fn build(
         light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
         seed: opts.seed,
     };
-    let baked = bake(scene, tracer, lights, &bake_opts)?;
+    let clock = Instant::now();
+    let baked = bake_reporting(scene, tracer, lights, &bake_opts, &|d, n| report(SURFELS, d, n))?;
+    times.surfels = clock.elapsed().as_secs_f64();
     stages.push(Stage {
         name: "surfels + direct light at surfels",
         skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
     });
+    let tree = |cloud: &PointCloud, times: &mut PreTimings| {
+        let clock = Instant::now();
+        report(TREE, 0, 1);
+        let tree = Tree::build(cloud);
+        report(TREE, 1, 1);
+        times.tree += clock.elapsed().as_secs_f64();
+        tree
+    };
     let scheme = opts.scheme.resolve(LANES);
     let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
     let mut direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
@@ -158,20 +179,29 @@ pub(super) fn build(
         if opts.bounces == 0 {
             cloud = dark;
         } else {
-            cloud = gather_bounce(&dark, &direct, &baked.albedo, &Tree::build(&dark), &gopts)?;
+            let dark_tree = tree(&dark, times);
+            let clock = Instant::now();
+            cloud = gather_bounce(&dark, &direct, &baked.albedo, &dark_tree, &gopts, &|d, n| {
+                report(SKY, d, n)
+            })?;
+            times.gathers += clock.elapsed().as_secs_f64();
             direct = cloud.surfels().iter().map(|s| s.radiance).collect();
         }
     }
-    let mut tree = Tree::build(&cloud);
+    let mut built = tree(&cloud, times);
     for _ in 1..opts.bounces.max(1) {
-        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &tree, &gopts)?;
-        tree = Tree::build(&cloud);
+        let clock = Instant::now();
+        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &built, &gopts, &|d, n| {
+            report(BOUNCE, d, n)
+        })?;
+        times.gathers += clock.elapsed().as_secs_f64();
+        built = tree(&cloud, times);
     }
     stages.push(Stage {
         name: "extra bounces gathered at surfels",
         skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
     });
-    Ok((cloud, tree))
+    Ok((cloud, built))
 }
 
 /// The stages of a render whose surfels and tree were loaded.
@@ -345,10 +375,29 @@ pub fn scene_hash(scene: &Scene) -> u64 {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn bake_tree(scene: &Scene, opts: &RenderOptions) -> Result<TreeFile, RenderError> {
+    bake_tree_reporting(scene, opts, &|_, _, _| {})
+}
+
+/// [`bake_tree`], telling `report` where it is (for a progress bar).
+pub fn bake_tree_reporting(
+    scene: &Scene,
+    opts: &RenderOptions,
+    report: &Report,
+) -> Result<TreeFile, RenderError> {
     check_options(scene, opts)?;
+    report(TRACER, 0, 1);
     let tracer = Tracer::new(scene);
     let lights = Lights::new(scene);
-    let (cloud, tree) = build(scene, opts, &tracer, &lights, &mut Vec::new())?;
+    report(TRACER, 1, 1);
+    let (cloud, tree) = build(
+        scene,
+        opts,
+        &tracer,
+        &lights,
+        &mut Vec::new(),
+        &mut PreTimings::default(),
+        report,
+    )?;
     TreeFile::new(cloud, tree, bake_record(scene, opts))
         .map_err(|e| RenderError::Check(format!("baked tree: {e}")))
 }

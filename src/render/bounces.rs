@@ -33,11 +33,20 @@ pub(super) fn gather_bounce(
     albedo: &[Vec3],
     tree: &Tree,
     opts: &GatherOptions,
+    tick: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PointCloud, Error> {
     let gather = Gather::new(tree, opts)?;
     let surfels = cloud.surfels();
     let (receivers, members) = groups(tree, surfels, SURFEL_GROUP);
-    let gathered = gather.irradiance(&receivers)?;
+    // In runs of neighbours (the groups come in tree order), a progress
+    // report after each; a receiver's light is the same in any packet.
+    let run = (receivers.len() / 64).max(4096);
+    let mut gathered = Vec::with_capacity(receivers.len());
+    tick(0, receivers.len());
+    for part in receivers.chunks(run) {
+        gathered.extend(gather.irradiance(part)?);
+        tick(gathered.len(), receivers.len());
+    }
     let mut e = vec![Vec3::ZERO; surfels.len()];
     for (g, m) in gathered.iter().zip(&members) {
         for &i in m {

@@ -13,12 +13,13 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::baked::{
-    bake_record, build, check_options, check_record, environment, gather_options, loaded_stages, needs_points,
+    TRACER, bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
+    needs_points,
 };
 use super::image::Image;
 use super::light::Lights;
 use super::options::{Crop, RenderOptions};
-use super::output::{RenderError, RenderOutput, Stage, Timings};
+use super::output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
 use super::trace::Tracer;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
@@ -78,6 +79,7 @@ pub struct Frame<'s> {
     pub(crate) surfels: usize,
     pub(crate) scheme: Scheme,
     pub(crate) pre: f64,
+    pub(crate) pre_parts: PreTimings,
     pub(crate) stages: Vec<Stage>,
     pub(crate) needs_points: bool,
     /// What the open part of a receiver's hemisphere sees, and camera rays
@@ -89,7 +91,17 @@ impl<'s> Frame<'s> {
     /// Validates the options, builds the ray queries, bakes the surfels
     /// (with extra bounces if asked) and builds the tree.
     pub fn prepare(scene: &'s Scene, opts: &RenderOptions) -> Result<Self, RenderError> {
-        Self::prepare_with(scene, opts, None)
+        Self::prepare_with(scene, opts, None, &|_, _, _| {})
+    }
+
+    /// [`prepare`](Self::prepare), telling `report` which stage it is in
+    /// and how far along (for a progress bar over a large scene's `pre.`).
+    pub fn prepare_reporting(
+        scene: &'s Scene,
+        opts: &RenderOptions,
+        report: &Report,
+    ) -> Result<Self, RenderError> {
+        Self::prepare_with(scene, opts, None, report)
     }
 
     /// [`prepare`](Self::prepare) with the surfels and tree of `file` (from
@@ -97,13 +109,14 @@ impl<'s> Frame<'s> {
     /// them: the same frame, bit for bit. Errors: a tree baked from another
     /// scene or with other settings ([`RenderError::TreeMismatch`]).
     pub fn with_tree(scene: &'s Scene, opts: &RenderOptions, file: TreeFile) -> Result<Self, RenderError> {
-        Self::prepare_with(scene, opts, Some(file))
+        Self::prepare_with(scene, opts, Some(file), &|_, _, _| {})
     }
 
     fn prepare_with(
         scene: &'s Scene,
         opts: &RenderOptions,
         file: Option<TreeFile>,
+        report: &Report,
     ) -> Result<Self, RenderError> {
         check_options(scene, opts)?;
         let environment = environment(scene, opts);
@@ -112,11 +125,18 @@ impl<'s> Frame<'s> {
         let mut stages = Vec::new();
 
         let t_pre = Instant::now();
+        report(TRACER, 0, 1);
         let tracer = Tracer::new(scene);
         let lights = Lights::new(scene);
+        report(TRACER, 1, 1);
+        let mut pre_parts = PreTimings {
+            tracer: t_pre.elapsed().as_secs_f64(),
+            ..PreTimings::default()
+        };
         let (tree, surfels) = match file {
             None => {
-                let (cloud, tree) = build(scene, opts, &tracer, &lights, &mut stages)?;
+                let (cloud, tree) =
+                    build(scene, opts, &tracer, &lights, &mut stages, &mut pre_parts, report)?;
                 (tree, cloud.len())
             }
             Some(file) => {
@@ -163,6 +183,7 @@ impl<'s> Frame<'s> {
             surfels,
             scheme,
             pre,
+            pre_parts,
             stages,
             needs_points,
             environment,
@@ -460,6 +481,7 @@ impl<'s> Frame<'s> {
             },
             timings: Timings {
                 pre: self.pre,
+                pre_parts: self.pre_parts,
                 trav: timers.trav.seconds(),
                 shading: timers.shading.seconds(),
                 direct: timers.direct.seconds(),

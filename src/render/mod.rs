@@ -35,7 +35,7 @@ mod tile;
 mod trace;
 
 pub use bake::{BakeOptions, Baked, bake};
-pub use baked::{bake_record, bake_tree, scene_hash};
+pub use baked::{bake_record, bake_tree, bake_tree_reporting, scene_hash};
 pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use image::Image;
@@ -44,7 +44,7 @@ pub use near::NearRays;
 pub use options::{
     Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
 };
-pub use output::{RenderError, RenderOutput, Stage, Timings};
+pub use output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
 pub(crate) use shading::shading_point;
 pub use trace::{Hit, Tracer};

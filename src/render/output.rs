@@ -8,11 +8,31 @@ use crate::error::Error;
 use crate::scene::SceneError;
 use crate::simd::Isa;
 
+/// Where a render is, for a progress bar: `(stage, done, total)`, called
+/// with 0 done as a stage starts and `total` done as it ends (`total` 1 for
+/// a stage that counts nothing on the way), from any thread.
+pub type Report<'a> = dyn Fn(&'static str, usize, usize) + Sync + 'a;
+
+/// Wall-clock seconds of the parts of `pre.`: what grows with the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PreTimings {
+    /// The ray tracer's BVH over the triangles and the lights' tables.
+    pub tracer: f64,
+    /// Surfel placement and the direct light at the surfels.
+    pub surfels: f64,
+    /// Gathers at the surfels: the environment's light, extra bounces.
+    pub gathers: f64,
+    /// The trees over the surfels (none for a render from a tree file).
+    pub tree: f64,
+}
+
 /// Seconds per stage, summed over threads (the paper's Table 1 columns).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Timings {
     /// Point cloud (surfels + their direct light + extra bounces) and tree.
     pub pre: f64,
+    /// The parts of `pre`.
+    pub pre_parts: PreTimings,
     /// Cut traversal.
     pub trav: f64,
     /// Splatting and convolution.

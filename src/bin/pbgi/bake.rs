@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use pbgi::TreeFile;
-use pbgi::render::bake_tree;
+use pbgi::render::bake_tree_reporting;
 
 use crate::args::{BakeArgs, Res, bake_options};
-use crate::{load_lit_scene, thread_pool};
+use crate::{StageBars, load_lit_scene, thread_pool};
 
 /// A tree file, read and checked, with the seconds that took.
 pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
@@ -32,7 +32,10 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.pbgi", scene.name)));
     let pool = thread_pool(a.threads)?;
     let t0 = Instant::now();
-    let file = pool.install(|| bake_tree(&scene, &opts))?;
+    let stages = StageBars::new(&scene.name);
+    let file = pool.install(|| bake_tree_reporting(&scene, &opts, &|s, d, n| stages.report(s, d, n)));
+    stages.finish();
+    let file = file?;
     let seconds = t0.elapsed().as_secs_f64();
     let bytes = file.to_bytes();
     std::fs::write(&out_path, &bytes).map_err(|e| format!("{}: {e}", out_path.display()))?;

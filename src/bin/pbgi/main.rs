@@ -18,8 +18,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::SchemeChoice;
 use pbgi::render::{
-    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render,
-    render_reference,
+    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render_reference,
 };
 use pbgi::report::{BenchOptions, BenchRow, bench};
 use pbgi::scene::resolve;
@@ -120,9 +119,9 @@ fn progress_bar(unit: &str, message: String) -> ProgressBar {
 fn tick(bar: &ProgressBar, done: usize, total: usize) {
     if done == 0 {
         bar.set_length(total as u64);
-    } else {
-        bar.inc(1);
     }
+    // Reports from several threads may arrive out of order.
+    bar.set_position((done as u64).max(bar.position()));
     // Off a terminal, for logs: a line when the stage is done, and one at
     // each tenth of a stage that has run for 10 s.
     if bar.is_hidden() && total > 0 && done > 0 {
@@ -132,6 +131,42 @@ fn tick(bar: &ProgressBar, done: usize, total: usize) {
             eprintln!("{}: done in {elapsed:.1} s", bar.message());
         } else if now > before && elapsed >= 10.0 {
             eprintln!("{}: {now}0 % in {elapsed:.1} s", bar.message());
+        }
+    }
+}
+
+/// A bar per stage of a render's `pre.` ([`pbgi::render::Report`]), each
+/// replaced by the next stage's as it begins.
+pub(crate) struct StageBars {
+    scene: String,
+    current: std::sync::Mutex<Option<(&'static str, ProgressBar)>>,
+}
+
+impl StageBars {
+    pub(crate) fn new(scene: &str) -> Self {
+        Self {
+            scene: scene.to_string(),
+            current: std::sync::Mutex::new(None),
+        }
+    }
+
+    pub(crate) fn report(&self, stage: &'static str, done: usize, total: usize) {
+        let mut current = self.current.lock().unwrap_or_else(|e| e.into_inner());
+        if current.as_ref().is_none_or(|(s, _)| *s != stage) {
+            if let Some((_, bar)) = current.take() {
+                bar.finish_and_clear();
+            }
+            let unit = if total > 1 { "surfels" } else { "step" };
+            *current = Some((stage, progress_bar(unit, format!("{}: {stage}", self.scene))));
+        }
+        if let Some((_, bar)) = current.as_ref() {
+            tick(bar, done, total);
+        }
+    }
+
+    pub(crate) fn finish(&self) {
+        if let Some((_, bar)) = self.current.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            bar.finish_and_clear();
         }
     }
 }
@@ -161,7 +196,9 @@ pub(crate) fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::sce
 }
 
 fn cmd_render(a: &RenderArgs) -> Res<()> {
+    let clock = std::time::Instant::now();
     let scene = load_lit_scene(&a.scene, &a.environment)?;
+    let read = clock.elapsed().as_secs_f64();
     let opts = a.settings.for_scene(&a.scene, options(a)?);
     let out_path = a
         .output
@@ -173,24 +210,28 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         Some(path) => Some(bake::load_tree(path)?),
         None => None,
     };
-    let bar = progress_bar("tiles", format!("rendering {}", scene.name));
-    let progress = |done, total| tick(&bar, done, total);
     let mut from = None;
-    let out = pool.install(|| match loaded {
+    let stages = StageBars::new(&scene.name);
+    let frame = pool.install(|| match loaded {
         Some((tree, path, seconds)) => {
             from = Some((path, seconds));
-            let frame = Frame::with_tree(&scene, &opts, tree).map_err(|e| match e {
+            Frame::with_tree(&scene, &opts, tree).map_err(|e| match e {
                 RenderError::TreeMismatch { .. } => format!("{}: {e}", path.display()).into(),
                 e => Box::<dyn std::error::Error + Send + Sync>::from(e),
-            })?;
-            Ok::<_, Box<dyn std::error::Error + Send + Sync>>(frame.render(&progress)?)
+            })
         }
-        None => Ok(render(&scene, &opts, &progress)?),
+        None => Ok(Frame::prepare_reporting(&scene, &opts, &|s, d, n| {
+            stages.report(s, d, n)
+        })?),
     });
-    let out = out.map_err(|e| e as Box<dyn std::error::Error>)?;
+    stages.finish();
+    let frame = frame.map_err(|e| e as Box<dyn std::error::Error>)?;
+    let bar = progress_bar("tiles", format!("rendering {}", scene.name));
+    let out = pool.install(|| frame.render(&|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
+    println!("scene read in {read:.3} s (before the render's total)");
     if let Some((path, seconds)) = from {
         println!(
             "surfels + tree loaded from {} ({seconds:.3} s to read and check)",
@@ -452,6 +493,13 @@ fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderO
         "  {:>8.3} {:>16.3} {:>8.3} {:>8.3} {:>12.3}",
         t.pre, t.trav, t.shading, t.direct, t.total_wall
     );
+    let p = &t.pre_parts;
+    if out.surfels > 0 {
+        println!(
+            "  pre. (wall): ray-tracing BVH {:.3}, surfels + direct light {:.3}, gathers at surfels {:.3}, tree {:.3}",
+            p.tracer, p.surfels, p.gathers, p.tree
+        );
+    }
     println!("stages:");
     for s in &out.stages {
         match &s.skipped {
