@@ -356,7 +356,7 @@ pub(super) fn bake_reporting(
                 radiance: radiance.min(Vec3::splat(MAX_RADIANCE)),
             };
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if d % TICK == 0 || d == all.len() {
+            if d.is_multiple_of(TICK) || d == all.len() {
                 tick(d, all.len());
             }
             // Geometry beyond `MAX_COORDINATE` makes no surfel.
