@@ -287,7 +287,7 @@ pub struct Tree {
 }
 
 /// A node as the builder makes it, before the split into arrays.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 struct BuildNode {
     center: [f32; 3],
     centroid: [f32; 3],
@@ -301,7 +301,8 @@ struct BuildNode {
     normal: Vec3,
     radiance: Vec3,
     facets: u32,
-    cluster: Cluster,
+    /// The facets, where there are several.
+    cluster: Option<Box<Cluster>>,
     depth: u32,
 }
 
@@ -325,7 +326,16 @@ impl Tree {
         };
         let pairs = &mut tree.nodes.pairs;
         pairs.resize(n, PairRecord::default());
-        for (k, b) in built.iter().enumerate() {
+        // Exact sizes: growing by doubling overshot by up to half again.
+        let mixed = built
+            .iter()
+            .filter(|b| b.child & LEAF_BIT == 0 && b.facets > 1)
+            .count();
+        tree.splat.reserve_exact(built.len());
+        tree.radiance.reserve_exact(built.len());
+        tree.facets_of.reserve_exact(built.len());
+        tree.cluster.reserve_exact(mixed);
+        for (k, b) in built.into_iter().enumerate() {
             let (p, slot) = NodeArrays::locate(k as u32);
             let values = [
                 b.center[0],
@@ -365,7 +375,7 @@ impl Tree {
             tree.radiance.push(b.radiance);
             if kind == MIXED {
                 tree.facets_of.push(tree.cluster.len() as u32);
-                tree.cluster.push(b.cluster);
+                tree.cluster.push(*b.cluster.expect("a mixed node has its facets"));
             } else {
                 tree.facets_of.push(u32::MAX);
             }
