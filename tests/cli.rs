@@ -27,3 +27,113 @@ fn a_reader_that_closes_the_pipe_ends_pbgi_without_a_panic() {
         );
     }
 }
+
+/// A folder of its own for a test's files.
+fn scratch(tag: &str) -> std::path::PathBuf {
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("pbgi-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A `k`×`k` grid of quads (2k² triangles) on a unit square, as OFF.
+fn grid_off(k: usize) -> String {
+    let mut s = format!("OFF\n{} {} 0\n", (k + 1) * (k + 1), 2 * k * k);
+    for i in 0..=k {
+        for j in 0..=k {
+            s += &format!("{} {} 0\n", i as f32 / k as f32, j as f32 / k as f32);
+        }
+    }
+    let v = |i: usize, j: usize| i * (k + 1) + j;
+    for i in 0..k {
+        for j in 0..k {
+            s += &format!(
+                "3 {} {} {}\n3 {} {} {}\n",
+                v(i, j),
+                v(i + 1, j),
+                v(i + 1, j + 1),
+                v(i, j),
+                v(i + 1, j + 1),
+                v(i, j + 1)
+            );
+        }
+    }
+    s
+}
+
+#[test]
+fn bench_scale_times_each_part_of_each_case() {
+    let dir = scratch("scale");
+    let (small, large) = (dir.join("small.off"), dir.join("large.off"));
+    std::fs::write(&small, grid_off(2)).unwrap();
+    std::fs::write(&large, grid_off(60)).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+        .args([
+            "bench",
+            "--scale",
+            "--copies",
+            "3",
+            "--max-surfels",
+            "10000",
+            "--out",
+        ])
+        .arg(&dir)
+        .arg(&small)
+        .arg(&large)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}");
+    let csv = std::fs::read_to_string(dir.join("scale.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    // The two meshes and three copies of the last at the default budget,
+    // then the last at 10⁴ surfels.
+    let triangles: Vec<&str> = rows.iter().map(|r| r[1]).collect();
+    assert_eq!(triangles, ["8", "7200", "21600", "7200"], "{csv}");
+    let budget = pbgi::render::DEFAULT_SURFEL_BUDGET.to_string();
+    let budgets: Vec<&str> = rows.iter().map(|r| r[2]).collect();
+    assert_eq!(budgets, [budget.as_str(), &budget, &budget, "10000"], "{csv}");
+    for r in &rows {
+        let (budget, surfels): (f64, f64) = (r[2].parse().unwrap(), r[3].parse().unwrap());
+        assert!((surfels / budget - 1.0).abs() < 0.03, "{r:?}");
+        // Each part took some time, and they add up to at most the total.
+        let parts: Vec<f64> = r[4..10].iter().map(|x| x.parse().unwrap()).collect();
+        let total: f64 = r[10].parse().unwrap();
+        assert!(
+            parts.iter().all(|&t| t >= 0.0) && parts.iter().sum::<f64>() <= total * 1.001,
+            "{r:?}"
+        );
+        #[cfg(target_os = "linux")]
+        assert!(
+            r[11].parse::<u64>().unwrap() > 1 << 20,
+            "a peak of at least 1 MB: {r:?}"
+        );
+    }
+    assert!(std::fs::metadata(dir.join("scale.png")).unwrap().len() > 1000);
+}
+
+#[test]
+fn render_seed_chooses_the_noise_and_only_it() {
+    let dir = scratch("seed");
+    let digest = |seed: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(["render", "--spp", "1", "--seed", seed, "-o"])
+            .arg(dir.join(format!("box-{seed}.exr")))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let line = text
+            .lines()
+            .find(|l| l.contains("image digest"))
+            .unwrap_or_else(|| panic!("{text}"));
+        line.rsplit(' ').next().unwrap().to_string()
+    };
+    let (a, b, c) = (digest("7"), digest("7"), digest("8"));
+    assert_eq!(a, b, "the same seed, the same image");
+    assert_ne!(a, c, "another seed, other noise");
+}

@@ -375,7 +375,8 @@ impl Tree {
             tree.radiance.push(b.radiance);
             if kind == MIXED {
                 tree.facets_of.push(tree.cluster.len() as u32);
-                tree.cluster.push(*b.cluster.expect("a mixed node has its facets"));
+                tree.cluster
+                    .push(*b.cluster.expect("a mixed node has its facets"));
             } else {
                 tree.facets_of.push(u32::MAX);
             }
