@@ -353,3 +353,33 @@ fn mutated_files_never_panic() {
     }
     eprintln!("{parsed} of 200 mutated files still loaded; the rest were typed errors");
 }
+
+#[test]
+fn mitsuba_s_own_vector_and_point_forms_and_substituted_warnings() {
+    use pbgi::scene::Light;
+    let xml = r#"<scene version="3.0.0">
+<default name="spp" value="64"/>
+<integrator type="path"><integer name="max_depth" value="$spp"/></integrator>
+<emitter type="directional"><vector name="direction" x="0" y="-1" z="1"/><rgb name="irradiance" value="2"/></emitter>
+<emitter type="point"><point name="position" x="1" z="3"/></emitter>
+<shape type="rectangle"/>
+</scene>"#;
+    let s = load(&write("xyz.xml", xml)).unwrap();
+    let sun = std::f32::consts::FRAC_1_SQRT_2;
+    assert!(
+        s.lights.iter().any(|l| matches!(l, Light::Directional { direction, .. }
+            if (*direction - glam::Vec3::new(0.0, -sun, sun)).length() < 1e-6)),
+        "{:?}",
+        s.lights
+    );
+    assert!(
+        s.lights.iter().any(|l| matches!(l, Light::Point { position, .. } if *position == glam::Vec3::new(1.0, 0.0, 3.0))),
+        "{:?}",
+        s.lights
+    );
+    let ignored = s.warnings.iter().find(|w| w.contains("ignored")).expect("the integrator is reported");
+    assert!(ignored.contains("max_depth=64") && !ignored.contains('$'), "{ignored}");
+    let bad = r#"<scene version="3.0.0"><emitter type="point"><point name="position" x="one"/></emitter><shape type="rectangle"/></scene>"#;
+    let e = load(&write("xyz-bad.xml", bad)).unwrap_err().to_string();
+    assert!(e.contains("x=\"one\"") && e.contains(":1"), "{e}");
+}

@@ -23,18 +23,32 @@ use pbgi::scene::{Light, Scene, SceneError, available_scenes_in, builtin, catalo
 /// (its full frame's bias), the glossy box −7.6 % (not yet explained).
 const MEAN_SLACK: f64 = 0.1;
 
+/// How many surfels a test render asks for.
+#[derive(Clone, Copy)]
+enum Surfels {
+    Density(f32),
+    Budget(u32),
+}
+
 /// A tiny, quick render: no NaN, not black, and its mean within
 /// [`MEAN_SLACK`] of the path tracer's (a tenfold over-bright image passed
 /// the old check, a mean above 0.01).
-fn renders(mut scene: Scene, density: f32) {
+fn renders(mut scene: Scene, surfels: Surfels) {
     scene.validate().unwrap_or_else(|e| panic!("{}: {e}", scene.name));
     let aspect = scene.camera.height as f32 / scene.camera.width as f32;
     scene.camera.width = 24;
     scene.camera.height = ((24.0 * aspect) as u32).max(8);
-    let opts = RenderOptions {
-        spp: 16,
-        density,
-        ..Default::default()
+    let opts = match surfels {
+        Surfels::Density(density) => RenderOptions {
+            spp: 16,
+            density,
+            ..Default::default()
+        },
+        Surfels::Budget(budget) => RenderOptions {
+            spp: 16,
+            surfel_budget: Some(budget),
+            ..Default::default()
+        },
     };
     let out = render(&scene, &opts, &|_, _| {}).unwrap_or_else(|e| panic!("{}: {e}", scene.name));
     let px = &out.image.pixels;
@@ -68,7 +82,7 @@ fn every_builtin_validates_and_renders() {
     for name in builtin::NAMES {
         let scene = builtin::scene(name).unwrap();
         assert_eq!(scene.name, name);
-        renders(scene, 300.0);
+        renders(scene, Surfels::Density(300.0));
     }
 }
 
@@ -264,7 +278,17 @@ fn fetched_scenes_load_and_render() {
                 "{name} in {}: {tris} triangles, expected about {expected}",
                 dir.display()
             );
-            renders(scene, if real { 100.0 } else { 400.0 });
+            // The real files at `pbgi render`'s budget for a file (density
+            // 100 made one surfel per triangle, 72,000, while a triangle
+            // smaller than a surfel still had one of its own; now 7,500).
+            renders(
+                scene,
+                if real {
+                    Surfels::Budget(pbgi::render::DEFAULT_SURFEL_BUDGET)
+                } else {
+                    Surfels::Density(400.0)
+                },
+            );
         }
     }
 }

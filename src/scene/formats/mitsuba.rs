@@ -137,11 +137,12 @@ impl Mitsuba<'_> {
             .children()
             .filter(Node::is_element)
             .filter_map(|c| {
-                Some(format!(
-                    "{}={}",
-                    c.attribute("name")?,
-                    c.attribute("value").unwrap_or("…")
-                ))
+                // With `$name` parameters substituted where they resolve.
+                let value = match c.attribute("value") {
+                    Some(raw) => self.attr(c, "value").unwrap_or_else(|_| raw.to_string()),
+                    None => "…".to_string(),
+                };
+                Some(format!("{}={value}", c.attribute("name")?))
             })
             .collect();
         format!("{}({})", node.attribute("type").unwrap_or("?"), props.join(", "))
@@ -182,6 +183,18 @@ impl Mitsuba<'_> {
     }
 
     fn vec3(&self, node: Node, attr: &str) -> Result<Vec3, SceneError> {
+        // Mitsuba's own form of a `<vector>` or `<point>`: `x=`, `y=`,
+        // `z=`, each 0 where left out.
+        let xyz = ["x", "y", "z"];
+        if attr == "value" && node.attribute("value").is_none() && xyz.iter().any(|a| node.attribute(*a).is_some()) {
+            let mut v = [0.0f32; 3];
+            for (c, a) in v.iter_mut().zip(xyz) {
+                if node.attribute(a).is_some() {
+                    *c = self.float(node, a)?;
+                }
+            }
+            return Ok(Vec3::from_array(v));
+        }
         let v = self.attr(node, attr)?;
         let nums: Option<Vec<f32>> = v
             .split(|c: char| c == ',' || c.is_whitespace())
