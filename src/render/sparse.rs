@@ -44,14 +44,14 @@ const SAME_PLANE: f32 = 1e-4;
 /// surface curving by 5.7° keeps; normals further apart allow their angle's
 /// sine (a facet's edge between the points). A step is two surfaces.
 const CURVATURE: f32 = 0.05;
-/// The side, in pixels, of the smallest cell an edge halves. A sample in
-/// a two-pixel cell across an edge blends the corners on its own side, at
-/// most two pixels off: halving those cells too was the lattice's largest
-/// level (7,172 of the Cornell box's 16,535 gathers, 15,000 of the nave's
-/// 30,000) and changed no error measurably (Cornell box 3.17 → 3.18 %, nave
-/// 8.23 → 8.26 %, sunlit room 5.02 → 5.04 %, atrium 8.19 → 8.19 %, at the
-/// defaults against converged references; docs/lab/sparse-edges.md).
-const EDGE_CELL: u32 = 2;
+/// The side, in pixels, of the smallest cell an edge halves. Stopping at
+/// two-pixel cells (a sample there blends the corners on its own side)
+/// saved a fifth to a half of the gathers at no measured cost against the
+/// converged references of four scenes, but took Sponza's whole frame to
+/// 1.46 % from its dense render, against the 1 % the sparse render keeps
+/// (0.77 % at one pixel); stopping at two unless a corner is alone on its
+/// surface still gave 1.00 % (docs/lab/sparse-edges.md).
+const EDGE_CELL: u32 = 1;
 
 /// A gathered lattice point: where, and the irradiance (or occlusion) its
 /// microbuffer gave.
@@ -532,9 +532,7 @@ mod tests {
         assert!(!flat(2, [1.1, 1.0, 1.15], Vec3::Y).needs_refining(0, 0, 2, eye));
         assert!(flat(2, [1.1, 1.0, 1.3], Vec3::Y).needs_refining(0, 0, 2, eye));
         assert!(flat(4, [1.0, 1.0, 1.0], Vec3::X).needs_refining(0, 0, 4, eye));
-        assert!(!flat(2, [1.0, 1.0, 1.0], Vec3::X).needs_refining(0, 0, 2, eye));
-        // The light's change across the edge does not halve it either: the
-        // two sides are blended apart.
-        assert!(!flat(2, [1.0, 1.0, 3.0], Vec3::X).needs_refining(0, 0, 2, eye));
+        assert!(flat(2, [1.0, 1.0, 1.0], Vec3::X).needs_refining(0, 0, 2, eye));
+        assert!(flat(2, [1.0, 1.0, 3.0], Vec3::X).needs_refining(0, 0, 2, eye));
     }
 }
