@@ -137,3 +137,57 @@ fn render_seed_chooses_the_noise_and_only_it() {
     assert_eq!(a, b, "the same seed, the same image");
     assert_ne!(a, c, "another seed, other noise");
 }
+
+#[test]
+fn resolution_sizes_the_image_and_compare_follows() {
+    let dir = scratch("resolution");
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(args)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+        (out.status.success(), text)
+    };
+    let (image, reference) = (dir.join("box.exr"), dir.join("ref.exr"));
+    let (ok, text) = run(&[
+        "render",
+        "--spp",
+        "1",
+        "--resolution",
+        "40x24",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert!(ok && text.contains("40×24"), "{text}");
+    let size = |p: &std::path::Path| {
+        let img =
+            exr::prelude::read_first_rgba_layer_from_file(p, |_, _| (), |_, _, _: (f32, f32, f32, f32)| ())
+                .unwrap();
+        (img.layer_data.size.width(), img.layer_data.size.height())
+    };
+    assert_eq!(size(&image), (40, 24));
+    let (ok, text) = run(&[
+        "reference",
+        "--spp",
+        "4",
+        "--resolution",
+        "40x24",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(ok, "{text}");
+    assert_eq!(size(&reference), (40, 24));
+    let (i, r) = (image.to_str().unwrap(), reference.to_str().unwrap());
+    let (ok, text) = run(&["compare", i, r]);
+    assert!(
+        !ok && text.contains("--resolution"),
+        "the scene's own size refused: {text}"
+    );
+    let (ok, text) = run(&["compare", "--resolution", "40x24", i, r]);
+    assert!(ok && text.contains("relative RMSE"), "{text}");
+    for bad in ["0x10", "40", "40xten", "99999x10"] {
+        let (ok, text) = run(&["render", "--resolution", bad]);
+        assert!(!ok && text.contains("--resolution"), "{bad}: {text}");
+    }
+}

@@ -367,19 +367,89 @@ fn mitsuba_s_own_vector_and_point_forms_and_substituted_warnings() {
     let s = load(&write("xyz.xml", xml)).unwrap();
     let sun = std::f32::consts::FRAC_1_SQRT_2;
     assert!(
-        s.lights.iter().any(|l| matches!(l, Light::Directional { direction, .. }
+        s.lights
+            .iter()
+            .any(|l| matches!(l, Light::Directional { direction, .. }
             if (*direction - glam::Vec3::new(0.0, -sun, sun)).length() < 1e-6)),
         "{:?}",
         s.lights
     );
     assert!(
-        s.lights.iter().any(|l| matches!(l, Light::Point { position, .. } if *position == glam::Vec3::new(1.0, 0.0, 3.0))),
+        s.lights.iter().any(
+            |l| matches!(l, Light::Point { position, .. } if *position == glam::Vec3::new(1.0, 0.0, 3.0))
+        ),
         "{:?}",
         s.lights
     );
-    let ignored = s.warnings.iter().find(|w| w.contains("ignored")).expect("the integrator is reported");
-    assert!(ignored.contains("max_depth=64") && !ignored.contains('$'), "{ignored}");
+    let ignored = s
+        .warnings
+        .iter()
+        .find(|w| w.contains("ignored"))
+        .expect("the integrator is reported");
+    assert!(
+        ignored.contains("max_depth=64") && !ignored.contains('$'),
+        "{ignored}"
+    );
     let bad = r#"<scene version="3.0.0"><emitter type="point"><point name="position" x="one"/></emitter><shape type="rectangle"/></scene>"#;
     let e = load(&write("xyz-bad.xml", bad)).unwrap_err().to_string();
     assert!(e.contains("x=\"one\"") && e.contains(":1"), "{e}");
+}
+
+#[test]
+fn a_bare_mesh_is_the_same_two_sided_grey_in_every_format() {
+    // A unit cube seen by its default camera from +z, the face towards
+    // the camera wound inward: only a two-sided material shows it lit.
+    let v = [
+        [0, 0, 0],
+        [1, 0, 0],
+        [1, 1, 0],
+        [0, 1, 0],
+        [0, 0, 1],
+        [1, 0, 1],
+        [1, 1, 1],
+        [0, 1, 1],
+    ];
+    // The +z face (towards the default camera) wound to face −z.
+    let faces = [
+        [4, 6, 5],
+        [4, 7, 6],
+        [0, 2, 1],
+        [0, 3, 2],
+        [0, 1, 5],
+        [0, 5, 4],
+        [3, 7, 6],
+        [3, 6, 2],
+    ];
+    let mut obj = String::new();
+    let mut off = format!("OFF\n8 {} 0\n", faces.len());
+    for p in v {
+        obj += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        off += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    for f in faces {
+        obj += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+        off += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
+    }
+    let render = |path: PathBuf| {
+        let mut s = load(&path).unwrap();
+        assert!(
+            s.materials.iter().all(|m| m.two_sided),
+            "{}: {:?}",
+            path.display(),
+            s.materials
+        );
+        (s.camera.width, s.camera.height) = (16, 16);
+        let opts = pbgi::render::RenderOptions {
+            spp: 1,
+            ..Default::default()
+        };
+        pbgi::render::render(&s, &opts, &|_, _| {}).unwrap().image
+    };
+    let (a, b) = (render(write("cube.obj", &obj)), render(write("cube.off", &off)));
+    let centre = a.pixels[8 * 16 + 8];
+    assert!(
+        centre.min_element() > 0.05,
+        "the inward-wound face is lit: {centre}"
+    );
+    assert_eq!(a.digest(), b.digest(), "the same cube, the same image");
 }

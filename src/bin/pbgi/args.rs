@@ -270,6 +270,9 @@ pub struct ReferenceArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
+    /// Image size WxH instead of the scene's (as `pbgi render --resolution`).
+    #[arg(long, value_name = "WxH", value_parser = resolution)]
+    pub resolution: Option<(u32, u32)>,
 }
 
 #[derive(Args, Clone)]
@@ -289,6 +292,9 @@ pub struct CompareArgs {
     /// Also write the image, the reference and the signed error side by side as one PNG, the two exposed alike.
     #[arg(long)]
     pub side_by_side: Option<PathBuf>,
+    /// The size the images were rendered at, where not the scene's (`--resolution` of render and reference).
+    #[arg(long, value_name = "WxH", value_parser = resolution)]
+    pub resolution: Option<(u32, u32)>,
 }
 
 #[derive(Args, Clone)]
@@ -344,6 +350,10 @@ pub struct RenderArgs {
     /// image bit for bit on any machine and thread count).
     #[arg(long, default_value_t = RenderOptions::default().seed)]
     pub seed: u64,
+    /// Image size WxH instead of the scene's, the field of view kept on
+    /// the camera's axis (e.g. 1920x1080).
+    #[arg(long, value_name = "WxH", value_parser = resolution)]
+    pub resolution: Option<(u32, u32)>,
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -408,6 +418,23 @@ const MAX_SURFELS: u32 = 200_000_000;
 /// outside it (a negative one included).
 fn bounded_u32(lo: u32, hi: u32) -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(i64::from(lo)..=i64::from(hi))
+}
+
+/// The largest side `--resolution` accepts.
+const MAX_SIDE: u32 = 16_384;
+
+/// `--resolution WxH`: two whole numbers from 1 to [`MAX_SIDE`].
+fn resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .trim()
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("{s:?}: expected WxH, e.g. 1920x1080"))?;
+    let side = |t: &str, what: &str| match t.trim().parse::<i64>() {
+        Ok(n) if (1..=i64::from(MAX_SIDE)).contains(&n) => Ok(n as u32),
+        Ok(n) => Err(format!("{s:?}: a {what} of {n} pixels, expected 1 to {MAX_SIDE}")),
+        Err(_) => Err(format!("{s:?}: {t:?} is not a whole number of pixels")),
+    };
+    Ok((side(w, "width")?, side(h, "height")?))
 }
 
 /// `--threads`: 1 to [`MAX_THREADS`], the gather's own bound.

@@ -113,8 +113,9 @@ pub(crate) fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::sce
 
 fn cmd_render(a: &RenderArgs) -> Res<()> {
     let clock = std::time::Instant::now();
-    let scene = load_lit_scene(&a.scene, &a.environment)?;
+    let mut scene = load_lit_scene(&a.scene, &a.environment)?;
     let read = clock.elapsed().as_secs_f64();
+    resize(&mut scene, a.resolution);
     let opts = a.settings.for_scene(&a.scene, options(a)?);
     let out_path = a
         .output
@@ -186,8 +187,16 @@ fn cmd_scenes() -> Res<()> {
     Ok(())
 }
 
+/// The camera at `--resolution`: its field of view stays on its axis.
+fn resize(scene: &mut pbgi::scene::Scene, resolution: Option<(u32, u32)>) {
+    if let Some((w, h)) = resolution {
+        (scene.camera.width, scene.camera.height) = (w, h);
+    }
+}
+
 fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    resize(&mut scene, a.resolution);
     let out_path = a
         .output
         .clone()
@@ -221,7 +230,8 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
 }
 
 fn cmd_compare(a: &CompareArgs) -> Res<()> {
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    resize(&mut scene, a.resolution);
     let image = read_exr(&a.image)?;
     let references = a.reference.iter().map(|p| read_exr(p)).collect::<Res<Vec<_>>>()?;
     // The emitter mask is the scene's camera's: an image of another scene
@@ -231,7 +241,7 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
     for (path, i) in images {
         if (i.width, i.height) != (w, h) {
             return Err(format!(
-                "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene",
+                "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene, and their size with --resolution",
                 path.display(),
                 i.width,
                 i.height,

@@ -186,7 +186,10 @@ impl Mitsuba<'_> {
         // Mitsuba's own form of a `<vector>` or `<point>`: `x=`, `y=`,
         // `z=`, each 0 where left out.
         let xyz = ["x", "y", "z"];
-        if attr == "value" && node.attribute("value").is_none() && xyz.iter().any(|a| node.attribute(*a).is_some()) {
+        if attr == "value"
+            && node.attribute("value").is_none()
+            && xyz.iter().any(|a| node.attribute(*a).is_some())
+        {
             let mut v = [0.0f32; 3];
             for (c, a) in v.iter_mut().zip(xyz) {
                 if node.attribute(a).is_some() {

@@ -198,7 +198,12 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
             two_sided: false,
         });
     }
-    materials.push(Material::diffuse("default", Vec3::splat(0.5)));
+    // Faces with no material: the grey of a bare PLY or OFF mesh, two-sided
+    // as it is (an OBJ cube without its .mtl rendered black from behind).
+    materials.push(Material {
+        two_sided: true,
+        ..Material::diffuse("default", Vec3::splat(0.5))
+    });
     let default = materials.len() - 1;
     let meshes = models
         .into_iter()
