@@ -453,3 +453,34 @@ fn a_bare_mesh_is_the_same_two_sided_grey_in_every_format() {
     );
     assert_eq!(a.digest(), b.digest(), "the same cube, the same image");
 }
+
+#[test]
+fn mitsuba_smooths_a_mesh_file_without_normals_unless_asked_for_face_normals() {
+    // Two triangles folded 90° along the shared edge x = 0: a vertex on
+    // the fold takes the mean of both faces' normals, as Mitsuba's does.
+    write(
+        "fold.obj",
+        "v 0 0 0\nv 0 0 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 4 2\n",
+    );
+    let shape = |extra: &str| {
+        format!(
+            r#"<scene version="3.0.0"><shape type="obj"><string name="filename" value="fold.obj"/>{extra}</shape></scene>"#
+        )
+    };
+    let smooth = load(&write("fold.xml", &shape(""))).unwrap();
+    let n = smooth.meshes[0].normals.as_ref().expect("vertex normals made");
+    let fold = std::f32::consts::FRAC_1_SQRT_2;
+    let on_fold = n[0];
+    assert!(
+        (on_fold.abs() - glam::Vec3::new(fold, fold, 0.0)).length() < 1e-6,
+        "{on_fold}"
+    );
+    // Off the fold, a vertex of one face keeps that face's normal.
+    assert!((n[2].abs() - glam::Vec3::Y).length() < 1e-6, "{}", n[2]);
+    let flat = load(&write(
+        "fold-flat.xml",
+        &shape(r#"<boolean name="face_normals" value="true"/>"#),
+    ))
+    .unwrap();
+    assert!(flat.meshes[0].normals.is_none());
+}

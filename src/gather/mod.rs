@@ -68,6 +68,7 @@
 //! convolutions of its own.
 
 mod order;
+#[cfg(feature = "render")]
 pub(crate) use order::morton_codes;
 mod packets;
 

@@ -110,3 +110,24 @@ pub fn read_lat_long(path: &Path, scale: f32) -> Result<LatLong, SceneError> {
         what: format!("{}: {e}", path.display()),
     })
 }
+
+/// Area-weighted vertex normals of `mesh` (world space); a vertex whose
+/// faces cancel takes its first face's normal.
+pub(super) fn smooth_normals(mesh: &Mesh) -> Vec<Vec3> {
+    let mut sum = vec![Vec3::ZERO; mesh.positions.len()];
+    let mut first = vec![Vec3::ZERO; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            sum[i as usize] += n;
+            if first[i as usize] == Vec3::ZERO {
+                first[i as usize] = n;
+            }
+        }
+    }
+    sum.iter()
+        .zip(&first)
+        .map(|(s, f)| s.try_normalize().or_else(|| f.try_normalize()).unwrap_or(Vec3::Z))
+        .collect()
+}

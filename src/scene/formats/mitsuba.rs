@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
-use super::common::{parse_err, read_text, single_file, stem};
+use super::common::{parse_err, read_text, single_file, smooth_normals, stem};
 use super::obj::read_obj;
 use super::ply::read_ply;
 use crate::scene::shapes::{cube_mesh, quad_mesh, sphere_mesh};
@@ -480,6 +480,10 @@ impl Mitsuba<'_> {
             }
             mesh.normals = if face_normals {
                 None
+            } else if mesh.normals.is_none() && (ty == "obj" || ty == "ply") {
+                // As Mitsuba does for a mesh file without normals unless
+                // the shape asks for face normals.
+                Some(smooth_normals(&mesh))
             } else {
                 mesh.normals.map(|ns| {
                     ns.into_iter()
