@@ -137,33 +137,9 @@ where
             }
         };
         let pts: Vec<(f64, f64)> = pts.iter().copied().filter(|&(t, e)| t > 0.0 && e > 0.0).collect();
-        let style = color.stroke_width(2);
-        let legend = move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style);
-        if *method == Method::Denoised {
-            chart
-                .draw_series(DashedLineSeries::new(pts.clone(), 8, 4, style))
-                .map_err(err)?
-                .label(name.clone())
-                .legend(legend);
-        } else {
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(err)?
-                .label(name.clone())
-                .legend(legend);
-        }
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(err)?;
+        curve(&mut chart, name, &pts, color, *method == Method::Denoised)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(err)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
     root.present().map_err(err)?;
     Ok(())
 }
@@ -211,6 +187,62 @@ pub fn write_plots(
     image::save_buffer(png, &buf, w, h, image::ExtendedColorType::Rgb8)
         .map_err(|e| fail(png, e.to_string()))?;
     Ok(())
+}
+
+/// The charts here: log-log.
+type LogChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// A line through `pts` (dashed or solid) with a dot at each, in the
+/// legend as `name`.
+fn curve<'a, DB: DrawingBackend + 'a>(
+    chart: &mut LogChart<'a, DB>,
+    name: &str,
+    pts: &[(f64, f64)],
+    color: RGBColor,
+    dashed: bool,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let style = color.stroke_width(2);
+    let legend = move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style);
+    if dashed {
+        chart
+            .draw_series(DashedLineSeries::new(pts.to_vec(), 8, 4, style))
+            .map_err(err)?
+            .label(name)
+            .legend(legend);
+    } else {
+        chart
+            .draw_series(LineSeries::new(pts.to_vec(), style))
+            .map_err(err)?
+            .label(name)
+            .legend(legend);
+    }
+    chart
+        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The legend, boxed, at `position`.
+fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut LogChart<'a, DB>,
+    position: SeriesLabelPosition,
+    size: u32,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", size))
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// Writes the scale benchmark's plot to `png` and `svg`: wall-clock seconds
@@ -355,32 +387,7 @@ where
         } else {
             COLORS[i % COLORS.len()]
         };
-        let style = color.stroke_width(2);
-        let legend = move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style);
-        if name.starts_with("peak") {
-            chart
-                .draw_series(DashedLineSeries::new(pts.clone(), 8, 4, style))
-                .map_err(err)?
-                .label(*name)
-                .legend(legend);
-        } else {
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(err)?
-                .label(*name)
-                .legend(legend);
-        }
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(err)?;
+        curve(&mut chart, name, &pts, color, name.starts_with("peak"))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()
-        .map_err(err)?;
-    Ok(())
+    legend(&mut chart, SeriesLabelPosition::UpperLeft, 13)
 }

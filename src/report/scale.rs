@@ -131,6 +131,27 @@ fn peak() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// A row's columns, seconds, bytes and bytes per surfel written by the
+/// given functions.
+fn cells(
+    r: &ScaleRow,
+    seconds: impl Fn(f64) -> String,
+    bytes: impl Fn(Option<u64>) -> String,
+    per_surfel: impl Fn(f64) -> String,
+) -> Vec<String> {
+    let mut c = vec![
+        r.label.clone(),
+        r.triangles.to_string(),
+        r.budget.to_string(),
+        r.surfels.to_string(),
+    ];
+    let p = &r.pre;
+    c.extend([r.read, p.tracer, p.surfels, p.gathers, p.tree, r.frame, r.total].map(&seconds));
+    c.push(bytes(r.peak_bytes));
+    c.push(per_surfel(r.tree_bytes_per_surfel));
+    c
+}
+
 /// The cases as a Markdown table.
 pub fn scale_markdown(rows: &[ScaleRow]) -> String {
     let mut s = String::from(
@@ -139,24 +160,13 @@ pub fn scale_markdown(rows: &[ScaleRow]) -> String {
          | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     for r in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {:.2} s | {:.2} s | {:.2} s | {:.2} s | {:.2} s | {:.2} s | {:.2} s | {} | {:.0} |",
-            r.label,
-            r.triangles,
-            r.budget,
-            r.surfels,
-            r.read,
-            r.pre.tracer,
-            r.pre.surfels,
-            r.pre.gathers,
-            r.pre.tree,
-            r.frame,
-            r.total,
-            r.peak_bytes
-                .map_or_else(|| "—".to_string(), |b| format!("{:.0} MB", b as f64 / 1e6)),
-            r.tree_bytes_per_surfel
+        let cells = cells(
+            r,
+            |t| format!("{t:.2} s"),
+            |b| b.map_or_else(|| "—".to_string(), |b| format!("{:.0} MB", b as f64 / 1e6)),
+            |x| format!("{x:.0}"),
         );
+        let _ = writeln!(s, "| {} |", cells.join(" | "));
     }
     s
 }
@@ -167,23 +177,13 @@ pub fn scale_csv(rows: &[ScaleRow]) -> String {
         "label,triangles,budget,surfels,read_s,bvh_s,surfels_s,gathers_s,tree_s,frame_s,total_s,peak_bytes,tree_bytes_per_surfel\n",
     );
     for r in rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.label,
-            r.triangles,
-            r.budget,
-            r.surfels,
-            r.read,
-            r.pre.tracer,
-            r.pre.surfels,
-            r.pre.gathers,
-            r.pre.tree,
-            r.frame,
-            r.total,
-            r.peak_bytes.map_or_else(String::new, |b| b.to_string()),
-            r.tree_bytes_per_surfel
+        let cells = cells(
+            r,
+            |t| t.to_string(),
+            |b| b.map_or_else(String::new, |b| b.to_string()),
+            |x| x.to_string(),
         );
+        let _ = writeln!(s, "{}", cells.join(","));
     }
     s
 }
