@@ -52,9 +52,13 @@ pub struct Baked {
 
 /// A low-discrepancy point in the unit square (Hammersley with a scramble).
 fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
-    let x = (i as f32 + 0.5) / n as f32;
-    let y = (i.reverse_bits() ^ scramble) as f32 * (1.0 / 4_294_967_296.0);
-    Vec2::new(x, y)
+    Vec2::new((i as f32 + 0.5) / n as f32, radical_inverse(i, scramble))
+}
+
+/// Van der Corput's radical inverse of `i` in base 2, digits XORed with
+/// `scramble`: in `[0, 1)`.
+fn radical_inverse(i: u32, scramble: u32) -> f32 {
+    (i.reverse_bits() ^ scramble) as f32 * (1.0 / 4_294_967_296.0)
 }
 
 /// A triangle's place: its mesh and its index there.
@@ -69,6 +73,8 @@ type TriangleRef = (u32, u32);
 struct Pool {
     material: usize,
     triangles: Vec<TriangleRef>,
+    /// Twice the area and the unit normal of each of `triangles`.
+    shapes: Vec<(f32, Vec3)>,
     /// The summed area at each triangle's end.
     ends: Vec<f64>,
     count: u32,
@@ -76,53 +82,48 @@ struct Pool {
 }
 
 impl Pool {
-    fn area(&self) -> f64 {
-        self.ends.last().copied().unwrap_or(0.0)
+    /// The area each surfel stands for.
+    fn share(&self) -> f64 {
+        self.ends.last().copied().unwrap_or(0.0) / self.count as f64
+    }
+
+    /// The summed area at triangle `t`'s start.
+    fn start(&self, t: usize) -> f64 {
+        if t == 0 { 0.0 } else { self.ends[t - 1] }
     }
 
     /// The point at summed area `x` (in `[0, area)`), `w` the second
     /// coordinate across its triangle, with that triangle's normal.
     fn point(&self, scene: &Scene, x: f64, w: f32) -> (Vec3, Vec3) {
         let t = self.ends.partition_point(|&e| e <= x).min(self.ends.len() - 1);
-        let start = if t == 0 { 0.0 } else { self.ends[t - 1] };
-        let (v, twice_area, normal) = vertices(scene, self.triangles[t]);
+        let (mesh, i) = self.triangles[t];
+        let mesh = &scene.meshes[mesh as usize];
+        let v = mesh.triangles[i as usize].map(|i| mesh.positions[i as usize]);
+        let (twice_area, normal) = self.shapes[t];
         // The fraction of the triangle's area swept from its first vertex
         // is the square of the first coordinate of the area-preserving map.
-        let u = ((x - start) / (0.5 * twice_area as f64)).clamp(0.0, 1.0) as f32;
+        let u = ((x - self.start(t)) / (0.5 * twice_area as f64)).clamp(0.0, 1.0) as f32;
         (on_triangle(v, u, w), normal)
     }
 
     /// Surfel `k`: a point at the middle of its share, the area-weighted
     /// normal of the share, and the radius of a disk of the share's area.
     fn site(&self, scene: &Scene, k: u32) -> (Vec3, Vec3, f32) {
-        let share = self.area() / self.count as f64;
+        let share = self.share();
         let (lo, hi) = (k as f64 * share, (k + 1) as f64 * share);
         let mut t = self.ends.partition_point(|&e| e <= lo);
         let mut sum = Vec3::ZERO;
-        while t < self.ends.len() {
-            let start = if t == 0 { 0.0 } else { self.ends[t - 1] };
-            if start >= hi {
-                break;
-            }
-            let overlap = self.ends[t].min(hi) - start.max(lo);
-            sum += vertices(scene, self.triangles[t]).2 * overlap as f32;
+        while t < self.ends.len() && self.start(t) < hi {
+            let overlap = self.ends[t].min(hi) - self.start(t).max(lo);
+            sum += self.shapes[t].1 * overlap as f32;
             t += 1;
         }
-        let w = (k.reverse_bits() ^ self.scramble) as f32 * (1.0 / 4_294_967_296.0);
+        let w = radical_inverse(k, self.scramble);
         let (position, own) = self.point(scene, (k as f64 + 0.5) * share, w);
         let normal = sum.try_normalize().unwrap_or(own);
         let radius = (share / std::f64::consts::PI).sqrt() as f32;
         (position, normal, radius)
     }
-}
-
-/// The vertices, twice the area and the unit normal of a triangle known to
-/// be one ([`triangle`] gave `Some` for it).
-fn vertices(scene: &Scene, (mesh, t): TriangleRef) -> ([Vec3; 3], f32, Vec3) {
-    let mesh = &scene.meshes[mesh as usize];
-    let v = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
-    let (twice_area, normal) = triangle(v).expect("pooled triangles have an area");
-    (v, twice_area, normal)
 }
 
 /// The point of triangle `v` at `(u, w)` of the unit square, mapped
@@ -190,7 +191,7 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
     // Per large triangle, a count from its area (stochastic rounding),
     // stratified with a scrambled Hammersley set mapped area-preservingly.
     let mut own = Vec::new();
-    let mut small: Vec<Vec<TriangleRef>> = vec![Vec::new(); scene.materials.len()];
+    let mut small: Vec<Vec<(TriangleRef, (f32, Vec3))>> = vec![Vec::new(); scene.materials.len()];
     let mut tri_seed = Rng::new(opts.seed);
     for (m, (mesh, shape)) in scene.meshes.iter().zip(&shapes).enumerate() {
         for (t, (tri, shape)) in mesh.triangles.iter().zip(shape).enumerate() {
@@ -200,7 +201,7 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
             let area = 0.5 * twice_area;
             let want = area * opts.density;
             if want < 1.0 {
-                small[mesh.material].push((m as u32, t as u32));
+                small[mesh.material].push(((m as u32, t as u32), (twice_area, normal)));
                 continue;
             }
             let v = tri.map(|i| mesh.positions[i as usize]);
@@ -219,20 +220,20 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
         .into_iter()
         .enumerate()
         .filter(|(_, triangles)| !triangles.is_empty())
-        .map(|(material, triangles)| pool(scene, &shapes, material, triangles, opts))
+        .map(|(material, triangles)| pool(scene, material, triangles, opts))
         .collect();
     Ok(Sites { own, pools })
 }
 
-/// The pool of `material`'s small `triangles`: ordered, summed, counted.
+/// The pool of `material`'s small `triangles` (with twice their area and
+/// their normal): ordered, summed, counted.
 fn pool(
     scene: &Scene,
-    shapes: &[Vec<Option<(f32, Vec3)>>],
     material: usize,
-    triangles: Vec<TriangleRef>,
+    triangles: Vec<(TriangleRef, (f32, Vec3))>,
     opts: &BakeOptions,
 ) -> Pool {
-    let centroid = |&(m, t): &TriangleRef| {
+    let centroid = |&((m, t), _): &(TriangleRef, (f32, Vec3))| {
         let mesh = &scene.meshes[m as usize];
         mesh.triangles[t as usize]
             .iter()
@@ -241,21 +242,21 @@ fn pool(
             / 3.0
     };
     let codes = morton_codes(triangles.iter().map(centroid));
-    let mut keyed: Vec<(u8, u64, TriangleRef)> = triangles
+    let mut keyed: Vec<(u8, u64, TriangleRef, (f32, Vec3))> = triangles
         .iter()
         .zip(codes)
-        .map(|(&r, code)| {
-            let (_, normal) = shapes[r.0 as usize][r.1 as usize].expect("pooled triangles have an area");
-            (facing(normal), code, r)
+        .map(|(&(r, shape), code)| (facing(shape.1), code, r, shape))
+        .collect();
+    // The key and the place decide the order; the shape follows the place.
+    keyed.par_sort_unstable_by_key(|&(facing, code, r, _)| (facing, code, r));
+    let mut sum = 0.0f64;
+    let ends = keyed
+        .iter()
+        .map(|&(.., (twice_area, _))| {
+            sum += 0.5 * twice_area as f64;
+            sum
         })
         .collect();
-    keyed.par_sort_unstable();
-    let mut sum = 0.0f64;
-    let mut ends = Vec::with_capacity(keyed.len());
-    for &(_, _, (m, t)) in &keyed {
-        sum += 0.5 * shapes[m as usize][t as usize].map_or(0.0, |s| s.0) as f64;
-        ends.push(sum);
-    }
     let mut rng = Rng::new(mix(
         opts.seed ^ (material as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
     ));
@@ -263,7 +264,8 @@ fn pool(
     let count = want.floor() as u32 + u32::from((rng.f32() as f64) < want.fract());
     Pool {
         material,
-        triangles: keyed.into_iter().map(|(_, _, r)| r).collect(),
+        triangles: keyed.iter().map(|&(_, _, r, _)| r).collect(),
+        shapes: keyed.iter().map(|&(.., shape)| shape).collect(),
         ends,
         count,
         scramble: rng.next_u64() as u32,
@@ -327,11 +329,11 @@ pub(super) fn bake_reporting(
                 // One light sample at each of points spread over the share.
                 let pool = &pools[pool];
                 let spread = opts.light_samples.max(1);
-                let share = pool.area() / pool.count as f64;
+                let share = pool.share();
                 let mut sum = Vec3::ZERO;
                 for j in 0..spread {
                     let x = (k as f64 + (j as f64 + 0.5) / spread as f64) * share;
-                    let w = (j.reverse_bits() ^ scramble[1]) as f32 * (1.0 / 4_294_967_296.0);
+                    let w = radical_inverse(j, scramble[1]);
                     let (at, n) = pool.point(scene, x, w);
                     sum += lights.reflected(tracer, at, n, opts.light_samples.min(1), j, scramble, |_| f);
                 }

@@ -111,11 +111,20 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
 }
 
 /// What [`build`] reports as it goes: the stage names of [`Report`].
-pub(super) const TRACER: &str = "ray-tracing BVH";
+const TRACER: &str = "ray-tracing BVH";
 pub(super) const SURFELS: &str = "surfels + direct light";
 pub(super) const SKY: &str = "environment at surfels";
 pub(super) const BOUNCE: &str = "bounce at surfels";
 pub(super) const TREE: &str = "tree";
+
+/// The ray queries and the lights of `scene`, reported as one stage.
+pub(super) fn tracer_and_lights(scene: &Scene, report: &Report) -> (Tracer, Lights) {
+    report(TRACER, 0, 1);
+    let tracer = Tracer::new(scene);
+    let lights = Lights::new(scene);
+    report(TRACER, 1, 1);
+    (tracer, lights)
+}
 
 /// Surfels with direct light, the environment's light and extra bounces
 /// gathered at them, and their tree (an empty cloud when the render needs
@@ -385,10 +394,7 @@ pub fn bake_tree_reporting(
     report: &Report,
 ) -> Result<TreeFile, RenderError> {
     check_options(scene, opts)?;
-    report(TRACER, 0, 1);
-    let tracer = Tracer::new(scene);
-    let lights = Lights::new(scene);
-    report(TRACER, 1, 1);
+    let (tracer, lights) = tracer_and_lights(scene, report);
     let (cloud, tree) = build(
         scene,
         opts,

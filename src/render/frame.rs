@@ -13,8 +13,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::baked::{
-    TRACER, bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
-    needs_points,
+    bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
+    needs_points, tracer_and_lights,
 };
 use super::image::Image;
 use super::light::Lights;
@@ -125,10 +125,7 @@ impl<'s> Frame<'s> {
         let mut stages = Vec::new();
 
         let t_pre = Instant::now();
-        report(TRACER, 0, 1);
-        let tracer = Tracer::new(scene);
-        let lights = Lights::new(scene);
-        report(TRACER, 1, 1);
+        let (tracer, lights) = tracer_and_lights(scene, report);
         let mut pre_parts = PreTimings {
             tracer: t_pre.elapsed().as_secs_f64(),
             ..PreTimings::default()

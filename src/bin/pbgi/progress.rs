@@ -3,7 +3,6 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// A progress bar counting `unit`s; `tick(done, total)` is the library's callback shape.
 /// A bar of `unit`s with `message`. Its time left is the elapsed time
 /// scaled by the fraction still to do, shown from 5 % done on: a rate over
 /// the last few steps read "19h left" in a 17 s stage whose first tiles were
@@ -74,7 +73,13 @@ impl StageBars {
             if let Some((_, bar)) = current.take() {
                 bar.finish_and_clear();
             }
-            let unit = if total > 1 { "surfels" } else { "step" };
+            // The library's stages count surfels (their direct light),
+            // gathers (at groups of surfels), or one step.
+            let unit = match (stage.starts_with("surfels"), total > 1) {
+                (true, _) => "surfels",
+                (false, true) => "gathers",
+                (false, false) => "step",
+            };
             *current = Some((stage, progress_bar(unit, format!("{}: {stage}", self.scene))));
         }
         if let Some((_, bar)) = current.as_ref() {
