@@ -295,6 +295,7 @@ impl<'s> Frame<'s> {
     ) -> Vec<PacketPoint> {
         let cam = &self.scene.camera;
         let light_first = s.wrapping_mul(self.light_samples());
+        let spread = cam.pixel_spread();
         let mut points = Vec::with_capacity(pixels.len());
         for (k, &(x, y)) in pixels.iter().enumerate() {
             let pix = y * cam.width + x;
@@ -305,7 +306,7 @@ impl<'s> Frame<'s> {
             let dir = cam.ray_direction(fx, fy);
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {
-                    if let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit) {
+                    if let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit, spread) {
                         // One scramble per pixel: its camera samples' light
                         // samples are consecutive blocks of one sequence.
                         let h = mix(self.opts.seed ^ u64::from(pix).wrapping_mul(0xA24B_AED4_963E_E407));
@@ -344,7 +345,7 @@ impl<'s> Frame<'s> {
                 let sp = &pp.point;
                 let m = &self.scene.materials[sp.material];
                 let lobe = m.lobe();
-                let fd = m.albedo * std::f32::consts::FRAC_1_PI;
+                let fd = sp.albedo * std::f32::consts::FRAC_1_PI;
                 let (n, wo) = (sp.normal, sp.wo);
                 let f = |wi: Vec3| match &lobe {
                     Some(l) => fd + l.eval(n, wo, wi),
@@ -413,7 +414,7 @@ impl<'s> Frame<'s> {
         if self.opts.ao {
             Vec3::splat(1.0 - e.x)
         } else {
-            let mut l = m.albedo * std::f32::consts::FRAC_1_PI * e;
+            let mut l = sp.albedo * std::f32::consts::FRAC_1_PI * e;
             if let (Some(lobe), Some(mb)) = (m.lobe(), mb) {
                 l += mb.glossy(&self.tree, sp.wo, &lobe);
             }

@@ -11,7 +11,7 @@ use super::trace::Tracer;
 use crate::microbuffer::NearField;
 use crate::points::MAX_RADIANCE;
 use crate::rng::mix;
-use crate::scene::Scene;
+use crate::scene::{Scene, SurfacePoint};
 
 /// The scene along a receiver's short rays, shaded as its surfels are
 /// (`bake`): the near field of [`Gather::with_near_field`](crate::gather::Gather::with_near_field)
@@ -34,7 +34,8 @@ impl NearField for NearRays<'_> {
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {
         let o = origin + normal * self.tracer.epsilon();
         let hit = self.tracer.closest(o, dir, t_max)?;
-        let material = &self.scene.materials[self.scene.meshes[hit.mesh as usize].material];
+        let mesh = &self.scene.meshes[hit.mesh as usize];
+        let material = &self.scene.materials[mesh.material];
         // Flat normals, as the surfels have; a one-sided back face is black.
         let mut ng = hit.geometric_normal;
         if ng.dot(dir) > 0.0 {
@@ -43,7 +44,14 @@ impl NearField for NearRays<'_> {
             }
             ng = -ng;
         }
-        if material.albedo.max_element() <= 0.0 {
+        // A point lookup: the near field's rays average over the texture.
+        let at = SurfacePoint {
+            triangle: hit.triangle,
+            uv: hit.uv,
+            width: 0.0,
+        };
+        let albedo = material.albedo_at(mesh, &at);
+        if albedo.max_element() <= 0.0 {
             return Some(Vec3::ZERO);
         }
         let q = o + dir * hit.t;
@@ -52,7 +60,7 @@ impl NearField for NearRays<'_> {
         let h = mix(self.seed
             ^ (u64::from(q.x.to_bits()) | u64::from(q.y.to_bits()) << 32)
             ^ u64::from(q.z.to_bits()).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let f = material.albedo * std::f32::consts::FRAC_1_PI;
+        let f = albedo * std::f32::consts::FRAC_1_PI;
         let l = self.lights.reflected(
             self.tracer,
             q,

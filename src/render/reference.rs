@@ -19,7 +19,7 @@ use super::trace::Tracer;
 use crate::brdf::{GlossyLobe, lambert_sample};
 use crate::error::Error;
 use crate::rng::{Rng, film_point};
-use crate::scene::{Light, Material, Scene};
+use crate::scene::{Light, Scene};
 
 /// Path-tracer settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,17 +55,18 @@ pub struct ReferenceOutput {
 }
 
 /// The material's BRDF: Lambert plus an optional glossy lobe.
-struct Bsdf<'a> {
-    material: &'a Material,
+struct Bsdf {
+    /// The diffuse albedo at the point (textured).
+    albedo: Vec3,
     lobe: Option<GlossyLobe>,
 }
 
-impl Bsdf<'_> {
+impl Bsdf {
     fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         if n.dot(wi) <= 0.0 {
             return Vec3::ZERO;
         }
-        let d = self.material.albedo * std::f32::consts::FRAC_1_PI;
+        let d = self.albedo * std::f32::consts::FRAC_1_PI;
         match &self.lobe {
             Some(l) => d + l.eval(n, wo, wi),
             None => d,
@@ -76,7 +77,7 @@ impl Bsdf<'_> {
     fn glossy_weight(&self) -> f32 {
         match &self.lobe {
             Some(l) => {
-                let (d, s) = (self.material.albedo.max_element(), l.specular.max_element());
+                let (d, s) = (self.albedo.max_element(), l.specular.max_element());
                 if d + s > 0.0 { s / (d + s) } else { 0.5 }
             }
             None => 0.0,
@@ -225,7 +226,7 @@ fn trace_path(
             }
             break;
         };
-        let Some(sp) = shading_point(scene, tracer, origin, dir, &hit) else {
+        let Some(sp) = shading_point(scene, tracer, origin, dir, &hit, 0.0) else {
             break;
         };
         // Emission: seen directly, or reached by a BSDF sample (MIS with NEE).
@@ -245,7 +246,7 @@ fn trace_path(
         }
         let m = &scene.materials[sp.material];
         let bsdf = Bsdf {
-            material: m,
+            albedo: sp.albedo,
             lobe: m.lobe(),
         };
         let (p, n, wo) = (sp.position, sp.normal, sp.wo);

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::trace::{Hit, Tracer};
-use crate::scene::{Bump, Material, Scene};
+use crate::scene::{Bump, Material, Scene, SurfacePoint};
 
 /// Tilts `n` by the procedural bump at `p`.
 fn bumped(n: Vec3, p: Vec3, bump: &Bump) -> Vec3 {
@@ -24,16 +24,22 @@ pub(crate) struct ShadingPoint {
     pub wo: Vec3,
     /// Material index.
     pub material: usize,
+    /// Diffuse albedo here (the material's, textured).
+    pub albedo: Vec3,
     /// Emitted radiance towards the viewer.
     pub emitted: Vec3,
 }
 
+/// The shading point where the ray `origin + t·dir` hit. `spread` is the
+/// angle (radians) a pixel subtends, for the width textures are averaged
+/// over (0: a point lookup, as paths take).
 pub(crate) fn shading_point(
     scene: &Scene,
     tracer: &Tracer,
     origin: Vec3,
     dir: Vec3,
     hit: &Hit,
+    spread: f32,
 ) -> Option<ShadingPoint> {
     let mesh = &scene.meshes[hit.mesh as usize];
     let material: &Material = &scene.materials[mesh.material];
@@ -58,6 +64,16 @@ pub(crate) fn shading_point(
         }
         None => ng,
     };
+    // A pixel's footprint: the cone's width at the hit, stretched by the
+    // slant (ray cones, as in Ray Tracing Gems ch. 20).
+    let at = SurfacePoint {
+        triangle: hit.triangle,
+        uv: hit.uv,
+        width: hit.t * spread / ng.dot(dir).abs().max(0.05),
+    };
+    if let Some(map) = &material.normal_map {
+        normal = map.apply(mesh, &at, normal);
+    }
     if let Some(b) = &material.bump {
         normal = bumped(normal, position, b);
     }
@@ -71,6 +87,7 @@ pub(crate) fn shading_point(
         normal,
         wo: -dir,
         material: mesh.material,
+        albedo: material.albedo_at(mesh, &at),
         emitted,
     })
 }

@@ -235,10 +235,11 @@ impl Frame<'_> {
     /// its own microbuffer, and a bump map turns the normal, so the
     /// irradiance, from one pixel to the next (the bumped back wall of
     /// `cornell-box-glossy` refined every cell to one pixel, then gathered
-    /// per sample anyway: more gathers than the dense render).
+    /// per sample anyway: more gathers than the dense render), as does a
+    /// normal map.
     pub(crate) fn gathers_per_sample(&self, material: usize) -> bool {
         let m = &self.scene.materials[material];
-        m.glossy.is_some() || m.bump.is_some()
+        m.glossy.is_some() || m.bump.is_some() || m.normal_map.is_some()
     }
 
     /// Gathers the lattice of the window's camera samples (`None` unless the
@@ -327,6 +328,7 @@ impl Frame<'_> {
         timers: &Timers,
     ) -> Result<(), RenderError> {
         let cam = &self.scene.camera;
+        let spread = cam.pixel_spread();
         let mut hits: Vec<((u32, u32), ShadingPoint)> = points
             .par_iter()
             .filter_map(|&(x, y)| {
@@ -334,7 +336,7 @@ impl Frame<'_> {
                 let sp = self
                     .tracer
                     .closest(cam.origin, dir, f32::INFINITY)
-                    .and_then(|hit| shading_point(self.scene, &self.tracer, cam.origin, dir, &hit))?;
+                    .and_then(|hit| shading_point(self.scene, &self.tracer, cam.origin, dir, &hit, spread))?;
                 (!self.gathers_per_sample(sp.material)).then_some(((x, y), sp))
             })
             .collect();

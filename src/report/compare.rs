@@ -19,7 +19,7 @@ pub fn emitter_mask(scene: &Scene) -> Vec<bool> {
             hits.push(
                 tracer
                     .closest(cam.origin, dir, f32::INFINITY)
-                    .and_then(|hit| shading_point(scene, &tracer, cam.origin, dir, &hit))
+                    .and_then(|hit| shading_point(scene, &tracer, cam.origin, dir, &hit, 0.0))
                     .is_some_and(|sp| sp.emitted.max_element() > 0.0),
             );
         }

@@ -82,6 +82,7 @@ pub fn cornell_box() -> Scene {
             positions: positions.iter().map(|&p| Vec3::from_array(p)).collect(),
             triangles: triangles.to_vec(),
             normals: None,
+            uvs: Vec::new(),
             material,
             emission,
         })

@@ -18,6 +18,7 @@ pub mod formats;
 pub mod nave;
 #[cfg(feature = "formats")]
 mod shapes;
+pub mod texture;
 
 pub use catalogue::available_scenes;
 #[cfg(feature = "formats")]
@@ -26,11 +27,12 @@ pub use catalogue::{available_scenes_in, resolve, resolve_in};
 pub use fetched::SPONZA_SCALE;
 #[cfg(feature = "formats")]
 pub use formats::{load, load_with};
+pub use texture::{AlphaMap, NormalMap, Relief, SurfacePoint, Texture, TextureMap};
 
 use std::fmt;
 use std::path::PathBuf;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::brdf::GlossyLobe;
 use crate::points::MAX_RADIANCE;
@@ -72,7 +74,16 @@ pub struct Material {
     pub bump: Option<Bump>,
     /// Whether the back face reflects too (Mitsuba's `twosided`).
     pub two_sided: bool,
+    /// An image that multiplies `albedo` texel by texel.
+    pub albedo_map: Option<TextureMap>,
+    /// A cut-out: where its alpha is low the surface is not there.
+    pub alpha: Option<AlphaMap>,
+    /// A tangent-space normal map on the shading normal.
+    pub normal_map: Option<NormalMap>,
 }
+
+/// The largest albedo a texture lookup gives (a white texel times a factor of 1).
+pub const MAX_ALBEDO: f32 = 0.99;
 
 impl Material {
     /// A plain diffuse material.
@@ -83,7 +94,31 @@ impl Material {
             glossy: None,
             bump: None,
             two_sided: false,
+            albedo_map: None,
+            alpha: None,
+            normal_map: None,
         }
+    }
+
+    /// The albedo at `at` on `mesh`: `albedo` times the map's colour there
+    /// (averaged over the width `at` stands for), at most [`MAX_ALBEDO`].
+    #[inline]
+    pub fn albedo_at(&self, mesh: &Mesh, at: &SurfacePoint) -> Vec3 {
+        match &self.albedo_map {
+            None => self.albedo,
+            Some(map) => (self.albedo * map.sample(mesh, at).truncate()).min(Vec3::splat(MAX_ALBEDO)),
+        }
+    }
+
+    /// Whether the surface is there at `at` (no cut-out, or its alpha high enough).
+    #[inline]
+    pub fn opaque_at(&self, mesh: &Mesh, triangle: u32, uv: Vec2) -> bool {
+        self.alpha.as_ref().is_none_or(|a| a.opaque(mesh, triangle, uv))
+    }
+
+    /// Whether anything varies over the surface: a texture of any kind.
+    pub fn is_textured(&self) -> bool {
+        self.albedo_map.is_some() || self.alpha.is_some() || self.normal_map.is_some()
     }
 
     /// The glossy lobe the shading evaluates, if the material has one.
@@ -108,6 +143,9 @@ pub struct Mesh {
     /// Optional per-vertex shading normals (unit), same length as `positions`;
     /// `None` means face normals.
     pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinate sets (glTF's `TEXCOORD_n` is set `n`), each as
+    /// long as `positions`; `v` grows down the image (see [`texture`]).
+    pub uvs: Vec<Vec<Vec2>>,
     /// Index into [`Scene::materials`].
     pub material: usize,
     /// Emitted radiance (RGB) from the front face, for an area light.
@@ -196,6 +234,12 @@ impl Camera {
         } else {
             (t * w / h, t)
         }
+    }
+
+    /// The angle (radians) one pixel subtends at the image's centre.
+    pub fn pixel_spread(&self) -> f32 {
+        let (_, ty) = self.tan_half_fov();
+        2.0 * ty / self.height as f32
     }
 
     /// Direction (unit) of the ray through image position `(x, y)` in pixels,
@@ -337,13 +381,40 @@ impl Scene {
             if let Some(i) = m.normals.iter().flatten().position(|n| !n.is_finite()) {
                 return bad(format!("mesh {mi} ({}) normal {i} is not finite", m.name));
             }
+            for (set, uvs) in m.uvs.iter().enumerate() {
+                if uvs.len() != m.positions.len() {
+                    return bad(format!(
+                        "mesh {mi} ({}) texture coordinate set {set} has {} entries for {n} vertices",
+                        m.name,
+                        uvs.len()
+                    ));
+                }
+                if let Some(i) = uvs.iter().position(|uv| !uv.is_finite()) {
+                    return bad(format!(
+                        "mesh {mi} ({}) texture coordinate {i} of set {set} is not finite",
+                        m.name
+                    ));
+                }
+            }
         }
         for m in &self.materials {
-            if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 || m.albedo.max_element() >= 1.0 {
-                return bad(format!(
-                    "material {} albedo {} is not in [0, 1)",
-                    m.name, m.albedo
-                ));
+            // A texture's lookups are capped at MAX_ALBEDO: its factor may be 1.
+            let (out, range) = match m.albedo_map {
+                Some(_) => (m.albedo.max_element() > 1.0, "[0, 1]"),
+                None => (m.albedo.max_element() >= 1.0, "[0, 1)"),
+            };
+            if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 || out {
+                return bad(format!("material {} albedo {} is not in {range}", m.name, m.albedo));
+            }
+            if let Some(a) = &m.alpha
+                && !(a.factor.is_finite() && a.cutoff.is_finite() && a.channel < 4)
+            {
+                return bad(format!("material {} cut-out is not finite", m.name));
+            }
+            if let Some(nm) = &m.normal_map
+                && !nm.scale.is_finite()
+            {
+                return bad(format!("material {} normal map scale is not finite", m.name));
             }
             if let Some(g) = &m.glossy
                 && !(g.specular.is_finite()

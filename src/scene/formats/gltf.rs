@@ -1,7 +1,8 @@
 //! glTF 2.0: `.gltf` (JSON, buffers as base64 data URIs or `.bin` files
 //! beside it) and `.glb` (the binary container). Read: the default scene's
 //! node tree (else scene 0) with its transforms composed down the tree,
-//! triangle meshes, PBR metallic-roughness materials by their factors,
+//! triangle meshes with their texture coordinates, PBR metallic-roughness
+//! materials with their textures (`materials`),
 //! emissive materials (area lights), the first perspective camera and
 //! `KHR_lights_punctual` lights.
 //!
@@ -11,6 +12,7 @@
 //! radiance): a file is as bright here as in those viewers.
 
 mod buffers;
+mod materials;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -22,7 +24,8 @@ use ::gltf::{Document, Semantic, json};
 use glam::{Mat4, Quat, Vec3};
 
 use super::common::{framing_camera, parse_err, regular_file, stem};
-use crate::scene::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError};
+use super::images::Images;
+use crate::scene::{Camera, FovAxis, Light, Material, Mesh, Scene, SceneError};
 use buffers::{Buffers, load_buffers, split_glb};
 
 /// Height of the image a glTF camera gets; its width follows the aspect ratio.
@@ -74,6 +77,7 @@ pub fn read_gltf(path: &Path) -> Result<Scene, SceneError> {
         meshes: Vec::new(),
         materials: Vec::new(),
         material_of: HashMap::new(),
+        images: Images::default(),
         lights: Vec::new(),
         camera: None,
         warnings,
@@ -183,6 +187,8 @@ struct Gltf<'a> {
     materials: Vec<Material>,
     /// glTF material index (`None`: the primitive names none) → index in `materials`.
     material_of: HashMap<Option<usize>, usize>,
+    /// Texture images, each decoded once.
+    images: Images,
     lights: Vec<Light>,
     camera: Option<Camera>,
     warnings: Vec<String>,
@@ -333,6 +339,14 @@ impl Gltf<'_> {
                 }
                 None => None,
             };
+            let mut uvs = Vec::new();
+            while let Some(a) = prim.get(&Semantic::TexCoords(uvs.len() as u32)) {
+                let set = self.buffers.vec2(&format!("{what} TEXCOORD_{}", uvs.len()), &a)?;
+                if set.len() != n {
+                    return Err(self.err(format!("{what}: {} texture coordinates for {n} positions", set.len())));
+                }
+                uvs.push(set);
+            }
             let (material, emission) = self.material(&prim.material());
             self.meshes.push(Mesh {
                 name: format!("{name}/{}", prim.index()),
@@ -343,70 +357,12 @@ impl Gltf<'_> {
                     triangles
                 },
                 normals,
+                uvs,
                 material,
                 emission,
             });
         }
         Ok(())
-    }
-
-    /// The scene material for a glTF one (made once) and its emission.
-    ///
-    /// Metallic-roughness as the Mitsuba `plastic`/`conductor` loaders do
-    /// it: diffuse albedo `base·(1 − metallic)`, a glossy lobe of
-    /// reflectance `0.04·(1 − metallic) + base·metallic` (F0) and roughness
-    /// α = perceptual roughness². A primitive with no material gets the
-    /// two-sided grey of a bare mesh (the spec's default is a rough white
-    /// metal, which renders nothing diffuse).
-    fn material(&mut self, m: &::gltf::Material) -> (usize, Option<Vec3>) {
-        let emission = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
-        let emission = (emission.max_element() > 0.0).then_some(emission);
-        if let Some(&k) = self.material_of.get(&m.index()) {
-            return (k, emission);
-        }
-        let material = match m.index() {
-            None => {
-                self.warn("a primitive without a material gets a two-sided grey".into());
-                Material {
-                    two_sided: true,
-                    ..Material::diffuse("default", Vec3::splat(0.5))
-                }
-            }
-            Some(i) => {
-                let name = m.name().map_or_else(|| format!("material {i}"), str::to_string);
-                let pbr = m.pbr_metallic_roughness();
-                if pbr.base_color_texture().is_some()
-                    || pbr.metallic_roughness_texture().is_some()
-                    || m.emissive_texture().is_some()
-                    || m.normal_texture().is_some()
-                    || m.occlusion_texture().is_some()
-                {
-                    self.warn("textures are not supported: materials use their factors only".into());
-                }
-                let [r, g, b, _alpha] = pbr.base_color_factor();
-                let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
-                let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
-                let albedo = base * (1.0 - metallic);
-                if albedo.max_element() >= 1.0 {
-                    self.warn(format!("{name}: base colour {base} clamped below 1"));
-                }
-                let specular = Vec3::splat(0.04) * (1.0 - metallic) + base * metallic;
-                Material {
-                    name,
-                    albedo: albedo.min(Vec3::splat(0.99)),
-                    glossy: Some(Glossy {
-                        specular: specular.min(Vec3::splat(0.99)),
-                        roughness: pbr.roughness_factor().powi(2).clamp(0.01, 1.0),
-                    }),
-                    bump: None,
-                    two_sided: m.double_sided(),
-                }
-            }
-        };
-        self.materials.push(material);
-        let k = self.materials.len() - 1;
-        self.material_of.insert(m.index(), k);
-        (k, emission)
     }
 
     /// The first perspective camera: glTF cameras look down their −Z with +Y up.
@@ -506,7 +462,12 @@ impl Gltf<'_> {
         let used: Vec<String> = self
             .doc
             .extensions_used()
-            .filter(|e| !matches!(*e, "KHR_lights_punctual" | "KHR_materials_emissive_strength"))
+            .filter(|e| {
+                !matches!(
+                    *e,
+                    "KHR_lights_punctual" | "KHR_materials_emissive_strength" | "KHR_texture_transform"
+                )
+            })
             .map(str::to_string)
             .collect();
         if !used.is_empty() {

@@ -7,7 +7,9 @@
 
 mod common;
 mod gltf;
+mod images;
 mod mitsuba;
+mod mtl;
 mod obj;
 mod off;
 mod ply;

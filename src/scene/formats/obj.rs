@@ -3,14 +3,15 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::common::{parse_err, read_text};
-use crate::scene::{Glossy, Material, Mesh, SceneError};
+use crate::scene::{Material, Mesh, SceneError};
 
-/// Reads an OBJ with its MTL: one mesh per object; `Kd` is the albedo
-/// (clamped below 1, with a warning), `Ks`/`Ns` a glossy lobe, `Ke` emission.
-/// Files from the wild that write a light as `Ka` > 1 get that as emission (warned).
+/// Reads an OBJ with its MTL: one mesh per object, with its texture
+/// coordinates; the materials as `mtl` makes them (`Kd` and `map_Kd` the
+/// albedo, `Ks`/`Ns` a glossy lobe, `Ke` emission, `map_d` a cut-out,
+/// `bump`/`norm` a normal map).
 pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
     // tobj reports no line numbers: check the common faults first, with lines.
     let text = read_text(path)?;
@@ -162,42 +163,7 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
         ));
         Vec::new()
     });
-    let mut materials: Vec<Material> = Vec::new();
-    let mut emission = Vec::new();
-    for m in &mtl {
-        let kd = Vec3::from(m.diffuse.unwrap_or([0.5; 3]));
-        let mut albedo = kd;
-        if kd.max_element() >= 1.0 {
-            albedo = kd.min(Vec3::splat(0.99));
-            warnings.push(format!("material {}: Kd {kd} clamped below 1", m.name));
-        }
-        let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
-        let glossy = (ks.max_element() > 0.0).then(|| Glossy {
-            specular: ks.min(Vec3::splat(0.99)),
-            roughness: (2.0 / (m.shininess.unwrap_or(10.0).max(0.0) + 2.0)).sqrt(),
-        });
-        let ke = m.unknown_param.get("Ke").and_then(|s| parse_vec3(s));
-        let ka = Vec3::from(m.ambient.unwrap_or([0.0; 3]));
-        let e = match ke {
-            Some(e) if e.max_element() > 0.0 => Some(e),
-            _ if ka.max_element() > 1.0 => {
-                warnings.push(format!(
-                    "material {}: Ka {ka} > 1 taken as emitted radiance",
-                    m.name
-                ));
-                Some(ka)
-            }
-            _ => None,
-        };
-        emission.push(e);
-        materials.push(Material {
-            name: m.name.clone(),
-            albedo,
-            glossy,
-            bump: None,
-            two_sided: false,
-        });
-    }
+    let (mut materials, emission) = super::mtl::materials(&dir, &mtl, &mut warnings);
     // Faces with no material: the grey of a bare PLY or OFF mesh, two-sided
     // as it is (an OBJ cube without its .mtl rendered black from behind).
     materials.push(Material {
@@ -222,16 +188,28 @@ pub fn read_obj(path: &Path) -> Result<ObjFile, SceneError> {
                         .collect()
                 });
             let material = mesh.material_id.filter(|&i| i < default).unwrap_or(default);
+            // OBJ's v grows up the image; the scene's grows down.
+            let uvs = (mesh.texcoords.len() / 2 == positions.len() && !positions.is_empty())
+                .then(|| {
+                    mesh.texcoords
+                        .chunks_exact(2)
+                        .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                        .collect()
+                })
+                .into_iter()
+                .collect();
             Mesh {
                 name: m.name,
                 positions,
                 triangles: mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
                 normals,
+                uvs,
                 material,
                 emission: emission.get(material).copied().flatten(),
             }
         })
-        .collect();
+        .collect::<Vec<Mesh>>();
+    super::mtl::scale_heights(&mut materials, &meshes);
     Ok(ObjFile {
         meshes,
         materials,
@@ -262,16 +240,4 @@ pub struct ObjFile {
     pub materials: Vec<Material>,
     /// What was read but changed or not supported.
     pub warnings: Vec<String>,
-}
-
-fn parse_vec3(s: &str) -> Option<Vec3> {
-    let v: Vec<f32> = s
-        .split_whitespace()
-        .map(|t| t.parse().ok())
-        .collect::<Option<_>>()?;
-    match v.as_slice() {
-        [x] => Some(Vec3::splat(*x)),
-        [x, y, z] => Some(Vec3::new(*x, *y, *z)),
-        _ => None,
-    }
 }

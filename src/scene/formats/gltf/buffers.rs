@@ -7,7 +7,7 @@ use std::path::Path;
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::buffer::Source;
 use ::gltf::{Accessor, Document};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::super::common::{parse_err, regular_file};
 use crate::scene::SceneError;
@@ -123,7 +123,7 @@ pub(super) fn load_buffers(
 }
 
 /// Standard base64 (padding optional); the error is the offending character's position.
-fn base64(s: &str) -> Result<Vec<u8>, usize> {
+pub(super) fn base64(s: &str) -> Result<Vec<u8>, usize> {
     let mut out = Vec::with_capacity(s.len() / 4 * 3);
     let (mut acc, mut bits) = (0u32, 0);
     for (i, c) in s.bytes().enumerate() {
@@ -147,7 +147,7 @@ fn base64(s: &str) -> Result<Vec<u8>, usize> {
 }
 
 /// `%20` and friends in a relative URI.
-fn percent_decode(uri: &str) -> String {
+pub(super) fn percent_decode(uri: &str) -> String {
     let b = uri.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
@@ -249,6 +249,39 @@ impl Buffers<'_> {
             .into_iter()
             .map(|e| Vec3::new(f(&e[0..4]), f(&e[4..8]), f(&e[8..12])))
             .collect())
+    }
+
+    /// A `VEC2` accessor of floats or normalized unsigned bytes or shorts
+    /// (texture coordinates).
+    pub fn vec2(&self, what: &str, a: &Accessor) -> Result<Vec<Vec2>, SceneError> {
+        let read: fn(&[u8]) -> Vec2 = match (a.dimensions(), a.data_type(), a.normalized()) {
+            (Dimensions::Vec2, DataType::F32, _) => |b| {
+                let f = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                Vec2::new(f(&b[0..4]), f(&b[4..8]))
+            },
+            (Dimensions::Vec2, DataType::U8, true) => |b| Vec2::new(b[0] as f32, b[1] as f32) / 255.0,
+            (Dimensions::Vec2, DataType::U16, true) => |b| {
+                let s = |b: &[u8]| u16::from_le_bytes([b[0], b[1]]) as f32;
+                Vec2::new(s(&b[0..2]), s(&b[2..4])) / 65535.0
+            },
+            (d, t, _) => {
+                return Err(parse_err(
+                    self.path,
+                    0,
+                    format!(
+                        "{what}: accessor {} is {d:?} {t:?}, expected VEC2 float or normalized unsigned",
+                        a.index()
+                    ),
+                ));
+            }
+        };
+        Ok(self.elements(what, a)?.into_iter().map(read).collect())
+    }
+
+    /// The bytes of a buffer view (an embedded image), `None` past its buffer's end.
+    pub fn view(&self, view: &::gltf::buffer::View) -> Option<&[u8]> {
+        let end = view.offset().checked_add(view.length())?;
+        self.data.get(view.buffer().index())?.get(view.offset()..end)
     }
 
     /// A `SCALAR` unsigned-integer accessor (indices).
