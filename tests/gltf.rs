@@ -216,6 +216,7 @@ fn cornell_in_code() -> Scene {
                 positions,
                 triangles: vec![[0, 1, 2], [0, 2, 3]],
                 normals: None,
+                uvs: Vec::new(),
                 material,
                 emission: None,
             })

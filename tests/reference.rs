@@ -72,6 +72,7 @@ fn floor_under_sky(rho: f32, l: f32) -> Scene {
             positions,
             triangles: vec![[0, 2, 1], [0, 3, 2]],
             normals: None,
+            uvs: Vec::new(),
             material: 0,
             emission,
         }

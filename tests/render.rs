@@ -272,6 +272,7 @@ fn open_box() -> Scene {
             positions: q.to_vec(),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             normals: None,
+            uvs: Vec::new(),
             material: 0,
             emission: None,
         }

@@ -24,6 +24,7 @@ mod scenes;
 mod shading_analytic;
 mod stability;
 mod surfel_budget;
+mod textures;
 mod tiles;
 mod tree_build;
 mod tree_file;

@@ -139,6 +139,21 @@ impl<'g, 't> Gatherer<'g, 't> {
         self.cuts.shade(g.path.isa, g.tree(), bufs, what, g.near)
     }
 
+    /// [`shade`](Self::shade), each receiver's irradiance convolved about
+    /// its own normal of `normals` where that is not the receiver's (a
+    /// normal map's: [`MicroBuffer::tilt`]).
+    pub fn shade_tilted(&mut self, what: Convolution, normals: impl Iterator<Item = Vec3>) -> Vec<Vec3> {
+        let bufs = &mut self.bufs[..self.receivers.len()];
+        for ((b, r), n) in bufs.iter_mut().zip(&self.receivers).zip(normals) {
+            b.reset(r.position(), r.normal());
+            if n != r.normal() {
+                b.tilt(n);
+            }
+        }
+        let g = self.gather;
+        self.cuts.shade(g.path.isa, g.tree(), bufs, what, g.near)
+    }
+
     /// The microbuffers of the last shaded packet, one per receiver (for
     /// convolutions of their own: [`MicroBuffer::glossy`]).
     pub fn buffers(&self) -> &[MicroBuffer] {

@@ -51,6 +51,9 @@ pub struct MicroBuffer {
     pub(super) scratch: compose::Scratch,
     /// What this receiver sees within a few surfel radii, by rays (`near`).
     pub(super) near: Option<Near>,
+    /// The normal irradiance is convolved about, in the local frame, where
+    /// it is not the receiver's own (a normal map's).
+    pub(super) shading: Option<Vec3>,
 }
 
 impl MicroBuffer {
@@ -76,6 +79,7 @@ impl MicroBuffer {
             environment: None,
             scratch: compose::Scratch::default(),
             near: None,
+            shading: None,
         })
     }
 
@@ -110,6 +114,17 @@ impl MicroBuffer {
         self.frame = [t, bt, n];
         self.frags.clear();
         self.near = None;
+        self.shading = None;
+    }
+
+    /// Convolves irradiance about `normal` (unit, world space) rather than
+    /// the receiver's: the buffer still sees the receiver's hemisphere
+    /// (what lies above its surface), weighed by the cosine to `normal` (a
+    /// normal map's). Until the next [`reset`](Self::reset).
+    pub fn tilt(&mut self, normal: Vec3) {
+        let [t, b, n] = self.frame;
+        let local = Vec3::new(normal.dot(t), normal.dot(b), normal.dot(n));
+        self.shading = (local != Vec3::Z).then_some(local);
     }
 
     #[inline]
@@ -216,6 +231,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            shading: self.shading,
         };
         // The sky from the fields, not `sky()`: that would borrow the whole
         // buffer, whose working memory the composition writes.
@@ -237,6 +253,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            shading: self.shading,
         }
     }
 
@@ -284,6 +301,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            shading: self.shading,
         };
         compose::occlusion(&self.table, &self.frags, tree, &site, &mut self.scratch)
     }

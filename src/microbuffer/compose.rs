@@ -107,6 +107,8 @@ pub(crate) struct Site<'a> {
     pub frame: [Vec3; 3],
     /// Leaves drawn by rays, and what each pixel's ray met (`near`).
     pub near: Option<&'a Near>,
+    /// The normal irradiance is convolved about (local frame), if not +z.
+    pub shading: Option<Vec3>,
 }
 
 /// The composition's working memory, kept by a microbuffer from one
@@ -139,6 +141,8 @@ pub(crate) struct Scratch {
     /// radiance it lets through (empty when only coverage was asked for).
     pub cover: Vec<f32>,
     pub radiance: Vec<Vec3>,
+    /// Per pixel `∫ max(0, n·ω) dω` about a tilted normal (`Site::shading`).
+    tilted: Vec<f32>,
 }
 
 /// A fragment at a pixel's sub-samples: its `Lanes` less the far depth
@@ -201,6 +205,7 @@ pub(crate) fn compose(
         backs,
         cover: out_cover,
         radiance: out_radiance,
+        tilted: _,
     } = s;
     // One shape per splat (its fragments are consecutive). With the
     // radiance, the brightest the nodes hold: their own radiance, not the
@@ -432,9 +437,16 @@ pub(crate) fn irradiance(
     scratch: &mut Scratch,
 ) -> Vec3 {
     let mut brightest = compose(t, frags, tree, site, true, scratch);
+    let weights = match site.shading {
+        None => &t.cos_weight,
+        Some(n) => {
+            tilted_weights(t, n, &mut scratch.tilted);
+            &scratch.tilted
+        }
+    };
     let (cover, radiance) = (&scratch.cover, &scratch.radiance);
     let mut e = Vec3::ZERO;
-    for (l, w) in radiance.iter().zip(&t.cos_weight) {
+    for (l, w) in radiance.iter().zip(weights) {
         e += *l * *w;
     }
     if let Some(sky) = sky {
@@ -443,13 +455,27 @@ pub(crate) fn irradiance(
         // and only the sum is right, as occlusion's is; an enclosed
         // receiver's sum may dip below zero, where no sky is seen.
         let mut open = Vec3::ZERO;
-        for (p, (cover, w)) in cover.iter().zip(&t.cos_weight).enumerate() {
+        for (p, (cover, w)) in cover.iter().zip(weights).enumerate() {
             open += sky.at(t, p) * ((1.0 - cover) * w);
         }
         e += at_least_zero(open);
         brightest = brightest.max(sky.environment.max_radiance());
     }
     at_most(e, brightest * std::f32::consts::PI)
+}
+
+/// Per pixel `∫ max(0, n·ω) dω` for local unit `n`, by the pixel's 4×4
+/// sub-sample directions (each a sixteenth of its solid angle).
+fn tilted_weights(t: &Table, n: Vec3, out: &mut Vec<f32>) {
+    out.clear();
+    for (sub, omega) in t.sub.iter().zip(&t.solid_angle) {
+        let count = sub[0].len();
+        let mut sum = 0.0f32;
+        for k in 0..count {
+            sum += (n.x * sub[0][k] + n.y * sub[1][k] + n.z * sub[2][k]).max(0.0);
+        }
+        out.push(sum * (omega / count as f32));
+    }
 }
 
 /// `v.max(0)`, but a NaN stays NaN: glam's `max` would return the zero and

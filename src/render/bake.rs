@@ -14,7 +14,7 @@ use crate::error::{Error, Invalid};
 use crate::gather::morton_codes;
 use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
 use crate::rng::{Rng, mix};
-use crate::scene::Scene;
+use crate::scene::{Scene, SurfacePoint};
 
 /// Surfels between two progress reports.
 const TICK: usize = 4096;
@@ -93,22 +93,24 @@ impl Pool {
     }
 
     /// The point at summed area `x` (in `[0, area)`), `w` the second
-    /// coordinate across its triangle, with that triangle's normal.
-    fn point(&self, scene: &Scene, x: f64, w: f32) -> (Vec3, Vec3) {
+    /// coordinate across its triangle, with that triangle's normal and
+    /// where on it the point is.
+    fn point(&self, scene: &Scene, x: f64, w: f32) -> (Vec3, Vec3, Place) {
         let t = self.ends.partition_point(|&e| e <= x).min(self.ends.len() - 1);
-        let (mesh, i) = self.triangles[t];
-        let mesh = &scene.meshes[mesh as usize];
+        let (m, i) = self.triangles[t];
+        let mesh = &scene.meshes[m as usize];
         let v = mesh.triangles[i as usize].map(|i| mesh.positions[i as usize]);
         let (twice_area, normal) = self.shapes[t];
         // The fraction of the triangle's area swept from its first vertex
         // is the square of the first coordinate of the area-preserving map.
         let u = ((x - self.start(t)) / (0.5 * twice_area as f64)).clamp(0.0, 1.0) as f32;
-        (on_triangle(v, u, w), normal)
+        let (p, bary) = on_triangle(v, u, w);
+        (p, normal, ((m, i), bary))
     }
 
     /// Surfel `k`: a point at the middle of its share, the area-weighted
     /// normal of the share, and the radius of a disk of the share's area.
-    fn site(&self, scene: &Scene, k: u32) -> (Vec3, Vec3, f32) {
+    fn site(&self, scene: &Scene, k: u32) -> Own {
         let share = self.share();
         let (lo, hi) = (k as f64 * share, (k + 1) as f64 * share);
         let mut t = self.ends.partition_point(|&e| e <= lo);
@@ -119,19 +121,20 @@ impl Pool {
             t += 1;
         }
         let w = radical_inverse(k, self.scramble);
-        let (position, own) = self.point(scene, (k as f64 + 0.5) * share, w);
+        let (position, own, place) = self.point(scene, (k as f64 + 0.5) * share, w);
         let normal = sum.try_normalize().unwrap_or(own);
         let radius = (share / std::f64::consts::PI).sqrt() as f32;
-        (position, normal, radius)
+        (position, normal, radius, self.material, place)
     }
 }
 
 /// The point of triangle `v` at `(u, w)` of the unit square, mapped
-/// area-preservingly.
-fn on_triangle(v: [Vec3; 3], u: f32, w: f32) -> Vec3 {
+/// area-preservingly, and its barycentric coordinates of vertices 1 and 2.
+fn on_triangle(v: [Vec3; 3], u: f32, w: f32) -> (Vec3, Vec2) {
     let su = u.sqrt();
     let (b0, b1) = (1.0 - su, w * su);
-    v[0] * b0 + v[1] * b1 + v[2] * (1.0 - b0 - b1)
+    let b2 = 1.0 - b0 - b1;
+    (v[0] * b0 + v[1] * b1 + v[2] * b2, Vec2::new(b1, b2))
 }
 
 /// Which of six directions (+x, +y, +z, −x, −y, −z: neighbours in this
@@ -148,8 +151,11 @@ fn facing(n: Vec3) -> u8 {
     axis + if n[axis as usize] < 0.0 { 3 } else { 0 }
 }
 
-/// Position, normal, radius and material of a surfel of a large triangle.
-type Own = (Vec3, Vec3, f32, usize);
+/// A triangle and barycentric coordinates on it (for texture lookups).
+type Place = (TriangleRef, Vec2);
+
+/// Position, normal, radius, material and place of a surfel.
+type Own = (Vec3, Vec3, f32, usize, Place);
 
 /// A surfel: a large triangle's, or the `k`-th of a pool.
 #[derive(Clone, Copy)]
@@ -212,7 +218,8 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
             let scramble = tri_seed.next_u64() as u32;
             for i in 0..n {
                 let u = hammersley(i, n, scramble);
-                own.push((on_triangle(v, u.x, u.y), normal, radius, mesh.material));
+                let (p, bary) = on_triangle(v, u.x, u.y);
+                own.push((p, normal, radius, mesh.material, ((m as u32, t as u32), bary)));
             }
         }
     }
@@ -312,14 +319,22 @@ pub(super) fn bake_reporting(
         .par_iter()
         .enumerate()
         .map(|(i, &site)| {
-            let (position, normal, radius, material) = match site {
+            let (position, normal, radius, material, ((m, t), bary)) = match site {
                 Site::Own(s) => s,
-                Site::Pooled { pool, k } => {
-                    let (position, normal, radius) = pools[pool].site(scene, k);
-                    (position, normal, radius, pools[pool].material)
-                }
+                Site::Pooled { pool, k } => pools[pool].site(scene, k),
             };
-            let albedo = scene.materials[material].albedo;
+            let (mesh, material) = (&scene.meshes[m as usize], &scene.materials[material]);
+            // No surfel on a cut-out's holes; a texture averaged over the
+            // surfel's disk.
+            if !material.opaque_at(mesh, t, bary) {
+                return Ok(None);
+            }
+            let at = SurfacePoint {
+                triangle: t,
+                uv: bary,
+                width: 2.0 * radius,
+            };
+            let albedo = material.albedo_at(mesh, &at);
             let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
             let f = albedo * std::f32::consts::FRAC_1_PI;
             let scramble = [h as u32, (h >> 32) as u32];
@@ -334,7 +349,7 @@ pub(super) fn bake_reporting(
                 for j in 0..spread {
                     let x = (k as f64 + (j as f64 + 0.5) / spread as f64) * share;
                     let w = radical_inverse(j, scramble[1]);
-                    let (at, n) = pool.point(scene, x, w);
+                    let (at, n, _) = pool.point(scene, x, w);
                     sum += lights.reflected(tracer, at, n, opts.light_samples.min(1), j, scramble, |_| f);
                 }
                 sum / spread as f32

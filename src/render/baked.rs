@@ -328,6 +328,10 @@ pub fn scene_hash(scene: &Scene) -> u64 {
             None => u32s(&mut h, &[0]),
         }
         vec3s(&mut h, &[m.emission.unwrap_or(Vec3::splat(-1.0))]);
+        // Only when present: an untextured scene hashes as it always did.
+        for uvs in &m.uvs {
+            uvs.iter().for_each(|uv| f32s(&mut h, &uv.to_array()));
+        }
     }
     u32s(&mut h, &[scene.materials.len() as u32]);
     for m in &scene.materials {
@@ -339,6 +343,28 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         f32s(&mut h, &g);
         f32s(&mut h, &b);
         u32s(&mut h, &[m.two_sided as u32]);
+        let maps = [
+            m.albedo_map.as_ref().map(|t| (t, 0, [0.0; 2])),
+            m.alpha
+                .as_ref()
+                .map(|a| (&a.map, 1 + a.channel as u32, [a.factor, a.cutoff])),
+            m.normal_map
+                .as_ref()
+                .map(|n| (&n.map, 5 + n.relief as u32, [n.scale, 0.0])),
+        ];
+        for (map, kind, values) in maps.into_iter().flatten() {
+            let t = &map.transform;
+            u32s(
+                &mut h,
+                &[kind, map.uv_set as u32, map.wrap[0] as u32, map.wrap[1] as u32],
+            );
+            f32s(
+                &mut h,
+                &[t.columns[0].x, t.columns[0].y, t.columns[1].x, t.columns[1].y],
+            );
+            f32s(&mut h, &[t.offset.x, t.offset.y, values[0], values[1]]);
+            h.write(&map.texture.fingerprint().to_le_bytes());
+        }
     }
     u32s(&mut h, &[scene.lights.len() as u32]);
     for l in &scene.lights {

@@ -295,7 +295,9 @@ impl<'s> Frame<'s> {
     ) -> Vec<PacketPoint> {
         let cam = &self.scene.camera;
         let light_first = s.wrapping_mul(self.light_samples());
-        let spread = cam.pixel_spread();
+        // Each of the pixel's stratified samples filters its own share of
+        // the pixel: together they cover it without blurring past it.
+        let spread = cam.pixel_spread() / (self.opts.spp as f32).sqrt();
         let mut points = Vec::with_capacity(pixels.len());
         for (k, &(x, y)) in pixels.iter().enumerate() {
             let pix = y * cam.width + x;
@@ -306,7 +308,9 @@ impl<'s> Frame<'s> {
             let dir = cam.ray_direction(fx, fy);
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {
-                    if let Some(point) = shading_point(self.scene, &self.tracer, cam.origin, dir, &hit, spread) {
+                    if let Some(point) =
+                        shading_point(self.scene, &self.tracer, cam.origin, dir, &hit, spread)
+                    {
                         // One scramble per pixel: its camera samples' light
                         // samples are consecutive blocks of one sequence.
                         let h = mix(self.opts.seed ^ u64::from(pix).wrapping_mul(0xA24B_AED4_963E_E407));
@@ -369,7 +373,7 @@ impl<'s> Frame<'s> {
     pub(crate) fn receivers(points: &[PacketPoint]) -> Result<Vec<Receiver>, Error> {
         points
             .iter()
-            .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+            .map(|pp| Receiver::new(pp.point.position, pp.point.receiver_normal))
             .collect()
     }
 
@@ -385,7 +389,7 @@ impl<'s> Frame<'s> {
     /// [`shade`](Self::shade), with each point's irradiance (or occlusion)
     /// before its material: what a nearby point of the same surface reuses.
     pub(crate) fn gathered(&self, points: &[&PacketPoint], gatherer: &mut Gatherer) -> Vec<(Vec3, Vec3)> {
-        let out = gatherer.shade(self.convolution());
+        let out = gatherer.shade_tilted(self.convolution(), points.iter().map(|pp| pp.point.normal));
         let bufs = gatherer.buffers();
         points
             .iter()

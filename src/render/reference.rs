@@ -301,6 +301,9 @@ fn trace_path(
         if pdf <= 0.0 {
             break; // a sample the lobe cannot make (below its cone)
         }
+        if wi.dot(sp.receiver_normal) <= 0.0 {
+            break; // a normal map's hemisphere dips into the surface, which blocks it
+        }
         throughput *= bsdf.eval(n, wo, wi) * (n.dot(wi) / pdf);
         if bounces < 0 && depth >= 3 {
             let q = throughput.max_element().min(0.95);

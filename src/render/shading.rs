@@ -18,8 +18,12 @@ fn bumped(n: Vec3, p: Vec3, bump: &Bump) -> Vec3 {
 pub(crate) struct ShadingPoint {
     /// Hit point, moved off the surface by the tracer's epsilon.
     pub position: Vec3,
-    /// Shading normal on the viewer's side.
+    /// Shading normal on the viewer's side (with its normal map).
     pub normal: Vec3,
+    /// The normal a receiver here gathers about: `normal` before the
+    /// normal map (the map tilts only the convolution: the receiver sees
+    /// what lies above its surface).
+    pub receiver_normal: Vec3,
     /// Unit direction back to the viewer.
     pub wo: Vec3,
     /// Material index.
@@ -71,11 +75,12 @@ pub(crate) fn shading_point(
         uv: hit.uv,
         width: hit.t * spread / ng.dot(dir).abs().max(0.05),
     };
-    if let Some(map) = &material.normal_map {
-        normal = map.apply(mesh, &at, normal);
-    }
     if let Some(b) = &material.bump {
         normal = bumped(normal, position, b);
+    }
+    let receiver_normal = normal;
+    if let Some(map) = &material.normal_map {
+        normal = map.apply(mesh, &at, normal);
     }
     let emitted = if front {
         mesh.emission.unwrap_or(Vec3::ZERO)
@@ -85,6 +90,7 @@ pub(crate) fn shading_point(
     Some(ShadingPoint {
         position: position + ng * tracer.epsilon(),
         normal,
+        receiver_normal,
         wo: -dir,
         material: mesh.material,
         albedo: material.albedo_at(mesh, &at),

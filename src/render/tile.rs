@@ -217,7 +217,7 @@ impl Frame<'_> {
                 let packet: Vec<&PacketPoint> = chunk.iter().map(|&i| &points[i].1).collect();
                 let receivers = packet
                     .iter()
-                    .map(|pp| Receiver::new(pp.point.position, pp.point.normal))
+                    .map(|pp| Receiver::new(pp.point.position, pp.point.receiver_normal))
                     .collect::<Result<Vec<_>, _>>()?;
                 let t1 = Instant::now();
                 acc.stats.merge(&gatherer.cut(&receivers)?);

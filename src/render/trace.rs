@@ -1,5 +1,7 @@
 //! Ray queries against the scene's triangles through a compressed wide BVH
-//! (obvhs): closest hits for camera rays, occlusion for shadow rays.
+//! (obvhs): closest hits for camera rays, occlusion for shadow rays. A
+//! material's cut-out is tested at each candidate hit: every ray passes
+//! through its holes.
 
 use std::time::Duration;
 
@@ -10,7 +12,7 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 
-use crate::scene::Scene;
+use crate::scene::{AlphaMap, Scene};
 
 /// A ray's closest hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +29,16 @@ pub struct Hit {
     pub geometric_normal: Vec3,
 }
 
+/// No cut-out.
+const NONE: u32 = u32::MAX;
+
+/// A triangle whose material cuts out: its vertices' texture coordinates
+/// and which cut-out.
+struct CutOut {
+    uvs: [Vec2; 3],
+    alpha: u32,
+}
+
 /// The scene's triangles in a BVH.
 pub struct Tracer {
     bvh: Option<CwBvh>,
@@ -34,6 +46,12 @@ pub struct Tracer {
     triangles: Vec<Triangle>,
     /// (mesh, triangle) of each entry of `triangles`.
     ids: Vec<(u32, u32)>,
+    /// Per entry of `triangles`, its index in `cutouts` (`NONE`: opaque);
+    /// empty when nothing is cut out.
+    cutout_of: Vec<u32>,
+    /// The triangles of cut-out materials: their texture coordinates and cut-out.
+    cutouts: Vec<CutOut>,
+    alphas: Vec<AlphaMap>,
     /// Offset that moves ray origins off their surface, relative to the scene size.
     epsilon: f32,
 }
@@ -44,8 +62,38 @@ impl Tracer {
         let mut triangles = Vec::with_capacity(scene.triangle_count());
         let mut ids = Vec::with_capacity(scene.triangle_count());
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        let cut = scene.materials.iter().any(|m| m.alpha.is_some());
+        let mut alphas: Vec<AlphaMap> = Vec::new();
+        let mut alpha_of = vec![NONE; scene.materials.len()];
+        let (mut cutout_of, mut cutouts) = (Vec::new(), Vec::new());
         for (mi, mesh) in scene.meshes.iter().enumerate() {
+            let alpha = scene.materials[mesh.material].alpha.as_ref();
+            let uvs = alpha.and_then(|a| mesh.uvs.get(a.map.uv_set));
+            if let Some(a) = alpha
+                && alpha_of[mesh.material] == NONE
+            {
+                alpha_of[mesh.material] = alphas.len() as u32;
+                alphas.push(a.clone());
+            }
             for (ti, t) in mesh.triangles.iter().enumerate() {
+                if let Some(a) = alpha
+                    && uvs.is_none()
+                    && !a.opaque(mesh, ti as u32, Vec2::ZERO)
+                {
+                    continue; // without coordinates, the texture's mean cuts it out whole
+                }
+                if cut {
+                    cutout_of.push(match uvs {
+                        Some(uvs) => {
+                            cutouts.push(CutOut {
+                                uvs: t.map(|i| uvs[i as usize]),
+                                alpha: alpha_of[mesh.material],
+                            });
+                            cutouts.len() as u32 - 1
+                        }
+                        None => NONE,
+                    });
+                }
                 let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
                 lo = lo.min(a).min(b).min(c);
                 hi = hi.max(a).max(b).max(c);
@@ -67,6 +115,9 @@ impl Tracer {
                 bvh: None,
                 triangles,
                 ids,
+                cutout_of,
+                cutouts,
+                alphas,
                 epsilon: 1e-4,
             };
         }
@@ -82,12 +133,40 @@ impl Tracer {
             .map(|&i| triangles[i as usize])
             .collect();
         let ids = bvh.primitive_indices.iter().map(|&i| ids[i as usize]).collect();
+        let cutout_of = if cut {
+            bvh.primitive_indices
+                .iter()
+                .map(|&i| cutout_of[i as usize])
+                .collect()
+        } else {
+            Vec::new()
+        };
         Tracer {
             bvh: Some(bvh),
             triangles,
             ids,
+            cutout_of,
+            cutouts,
+            alphas,
             epsilon: 1e-5 * extent,
         }
+    }
+
+    /// The distance to entry `id` along `ray` (∞: a miss, or a cut-out there).
+    #[inline(always)]
+    fn distance(&self, id: usize, ray: &Ray) -> f32 {
+        let (t, uv) = intersect(&self.triangles[id], ray);
+        if t.is_finite()
+            && let Some(&c) = self.cutout_of.get(id)
+            && c != NONE
+        {
+            let c = &self.cutouts[c as usize];
+            let at = c.uvs[0] * (1.0 - uv.x - uv.y) + c.uvs[1] * uv.x + c.uvs[2] * uv.y;
+            if !self.alphas[c.alpha as usize].opaque_at_uv(at) {
+                return f32::INFINITY;
+            }
+        }
+        t
     }
 
     /// Distance by which secondary rays leave a surface.
@@ -100,7 +179,7 @@ impl Tracer {
         let bvh = self.bvh.as_ref()?;
         let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         let mut hit = RayHit::none();
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| intersect(&self.triangles[id], r).0) {
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| self.distance(id, r)) {
             return None;
         }
         let id = hit.primitive_id as usize;
@@ -126,7 +205,7 @@ impl Tracer {
             return false;
         };
         let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
-        !bvh.ray_traverse_miss(ray, |r, id| intersect(&self.triangles[id], r).0)
+        !bvh.ray_traverse_miss(ray, |r, id| self.distance(id, r))
     }
 }
 

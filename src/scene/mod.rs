@@ -404,7 +404,10 @@ impl Scene {
                 None => (m.albedo.max_element() >= 1.0, "[0, 1)"),
             };
             if !m.albedo.is_finite() || m.albedo.min_element() < 0.0 || out {
-                return bad(format!("material {} albedo {} is not in {range}", m.name, m.albedo));
+                return bad(format!(
+                    "material {} albedo {} is not in {range}",
+                    m.name, m.albedo
+                ));
             }
             if let Some(a) = &m.alpha
                 && !(a.factor.is_finite() && a.cutoff.is_finite() && a.channel < 4)

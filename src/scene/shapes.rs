@@ -1,11 +1,13 @@
 //! Mesh primitives of the Mitsuba shapes that are not files (`rectangle`,
 //! `cube`, `sphere`), in their canonical frames.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::Mesh;
 
-/// Mitsuba's `rectangle`: [−1, 1]² in z = 0, facing +z.
+/// Mitsuba's `rectangle`: [−1, 1]² in z = 0, facing +z, with its texture
+/// coordinates `((x + 1)/2, (y + 1)/2)` (so, `v` growing down the image,
+/// a bitmap shows upside down, as it does in Mitsuba).
 pub fn quad_mesh() -> Mesh {
     Mesh {
         positions: vec![
@@ -15,6 +17,12 @@ pub fn quad_mesh() -> Mesh {
             Vec3::new(-1.0, 1.0, 0.0),
         ],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        uvs: vec![vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ]],
         ..Mesh::default()
     }
 }

@@ -193,7 +193,14 @@ impl Texture {
         encoding: Encoding,
         has_alpha: bool,
     ) -> Result<Texture, SceneError> {
-        Texture::build(name.into(), width, height, Texels::Bytes(texels), encoding, has_alpha)
+        Texture::build(
+            name.into(),
+            width,
+            height,
+            Texels::Bytes(texels),
+            encoding,
+            has_alpha,
+        )
     }
 
     /// A texture of linear RGBA values. Errors as [`Texture::from_bytes`],
@@ -212,7 +219,14 @@ impl Texture {
                 what: format!("texture {name}: texel ({}, {}) is not finite", i % w, i / w),
             });
         }
-        Texture::build(name, width, height, Texels::Floats(texels), Encoding::Linear, has_alpha)
+        Texture::build(
+            name,
+            width,
+            height,
+            Texels::Floats(texels),
+            Encoding::Linear,
+            has_alpha,
+        )
     }
 
     fn build(
@@ -254,6 +268,26 @@ impl Texture {
     /// Width and height of the image.
     pub fn size(&self) -> (u32, u32) {
         (self.levels[0].width, self.levels[0].height)
+    }
+
+    /// A 64-bit FNV-1a hash of the image's texels, size and encoding (what
+    /// a baked tree depends on).
+    pub fn fingerprint(&self) -> u64 {
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |bytes: &[u8]| {
+            for &b in bytes {
+                h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        let l = &self.levels[0];
+        eat(&l.width.to_le_bytes());
+        eat(&l.height.to_le_bytes());
+        eat(&[self.encoding as u8, self.has_alpha as u8]);
+        match &l.texels {
+            Texels::Bytes(t) => t.iter().for_each(|t| eat(t)),
+            Texels::Floats(t) => t.iter().flatten().for_each(|c| eat(&c.to_bits().to_le_bytes())),
+        }
+        h
     }
 
     /// Whether the image has an alpha channel.
@@ -445,8 +479,25 @@ impl AlphaMap {
     /// itself, bilinear).
     #[inline]
     pub fn opaque(&self, mesh: &Mesh, triangle: u32, uv: Vec2) -> bool {
-        let at = SurfacePoint { triangle, uv, width: 0.0 };
-        self.map.sample(mesh, &at)[self.channel] * self.factor >= self.cutoff
+        let at = SurfacePoint {
+            triangle,
+            uv,
+            width: 0.0,
+        };
+        self.passes(self.map.sample(mesh, &at))
+    }
+
+    /// Whether the surface is there at texture coordinates `uv` (of the
+    /// map's set, before its transform).
+    #[inline]
+    pub fn opaque_at_uv(&self, uv: Vec2) -> bool {
+        let m = &self.map;
+        self.passes(m.texture.sample(m.transform.apply(uv), 0.0, m.wrap))
+    }
+
+    #[inline(always)]
+    fn passes(&self, texel: Vec4) -> bool {
+        texel[self.channel] * self.factor >= self.cutoff
     }
 }
 
@@ -535,7 +586,11 @@ mod tests {
         assert_eq!(t[255], 1.0);
         for (b, &v) in t.iter().enumerate() {
             let c = b as f64 / 255.0;
-            let want = if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+            let want = if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            };
             assert!((v as f64 - want).abs() < 1e-7, "{b}: {v} against {want}");
         }
         for b in 0..=255u8 {
@@ -545,7 +600,12 @@ mod tests {
 
     #[test]
     fn levels_average_and_lookups_wrap() {
-        let texels = vec![[0, 0, 0, 255], [255, 255, 255, 255], [255, 255, 255, 255], [0, 0, 0, 255]];
+        let texels = vec![
+            [0, 0, 0, 255],
+            [255, 255, 255, 255],
+            [255, 255, 255, 255],
+            [0, 0, 0, 255],
+        ];
         let t = Texture::from_bytes("checker", 2, 2, texels, Encoding::Linear, false).unwrap();
         assert_eq!(t.levels.len(), 2);
         assert_eq!(t.mean().x, 128.0 / 255.0);

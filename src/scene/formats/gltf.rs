@@ -343,7 +343,10 @@ impl Gltf<'_> {
             while let Some(a) = prim.get(&Semantic::TexCoords(uvs.len() as u32)) {
                 let set = self.buffers.vec2(&format!("{what} TEXCOORD_{}", uvs.len()), &a)?;
                 if set.len() != n {
-                    return Err(self.err(format!("{what}: {} texture coordinates for {n} positions", set.len())));
+                    return Err(self.err(format!(
+                        "{what}: {} texture coordinates for {n} positions",
+                        set.len()
+                    )));
                 }
                 uvs.push(set);
             }

@@ -45,10 +45,7 @@ fn decode(source: ImageSource, encoding: Encoding) -> Result<Texture, String> {
             if !meta.is_file() {
                 return Err(format!("texture {name}: not a regular file"));
             }
-            if path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-            {
+            if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
                 return exr_texture(path).map_err(|e| format!("texture {name}: {e}"));
             }
             let bytes = std::fs::read(path).map_err(|e| format!("texture {name}: {e}"))?;

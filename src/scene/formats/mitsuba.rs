@@ -8,12 +8,14 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 
 use super::common::{parse_err, read_text, single_file, smooth_normals, stem};
+use super::images::Images;
 use super::obj::read_obj;
 use super::ply::read_ply;
 use crate::scene::shapes::{cube_mesh, quad_mesh, sphere_mesh};
-use crate::scene::{Camera, FovAxis, Glossy, Light, Material, Mesh, Scene, SceneError};
+use crate::scene::{Camera, FovAxis, Light, Material, Mesh, Scene, SceneError};
 
 /// Emitters: lights, and the environment (`constant`, `envmap`).
+mod bsdfs;
 mod emitters;
 
 struct Mitsuba<'a> {
@@ -29,6 +31,8 @@ struct Mitsuba<'a> {
     lights: Vec<Light>,
     environment: Option<crate::environment::Environment>,
     camera: Option<Camera>,
+    /// Texture images, each decoded once.
+    images: Images,
 }
 
 type Node<'a, 'b> = roxmltree::Node<'a, 'b>;
@@ -51,6 +55,7 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
         meshes: Vec::new(),
         lights: Vec::new(),
         camera: None,
+        images: Images::default(),
     };
     if root.tag_name().name() != "scene" {
         return Err(parse_err(
@@ -78,6 +83,8 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
                 });
                 m.bsdfs.insert(id, m.materials.len() - 1);
             }
+            // Read where a bsdf refers to it (`<ref name=… id=…>`).
+            "texture" if child.attribute("id").is_some() => {}
             "shape" => m.shape(child)?,
             "emitter" => m.emitter(child)?,
             "sensor" => m.sensor(child)?,
@@ -241,73 +248,6 @@ impl Mitsuba<'_> {
             Some(p) => self.float(p, "value"),
             None => Ok(default),
         }
-    }
-
-    fn bsdf(&mut self, node: Node) -> Result<Material, SceneError> {
-        let ty = self.attr(node, "type")?;
-        let name = node.attribute("id").unwrap_or(&ty).to_string();
-        let mut m = Material::diffuse(name.clone(), Vec3::splat(0.5));
-        match ty.as_str() {
-            "diffuse" => m.albedo = self.texture_or_color(node, "reflectance", Vec3::splat(0.5))?,
-            "twosided" => {
-                let inner = node
-                    .children()
-                    .find(|c| c.has_tag_name("bsdf"))
-                    .ok_or_else(|| self.err(node, "twosided without a nested <bsdf>"))?;
-                m = self.bsdf(inner)?;
-                m.name = name;
-                m.two_sided = true;
-            }
-            "plastic" | "roughplastic" => {
-                m.albedo = self.texture_or_color(node, "diffuse_reflectance", Vec3::splat(0.5))?;
-                let alpha = self.scalar_prop(node, "alpha", if ty == "plastic" { 0.02 } else { 0.1 })?;
-                let spec = self.color(node, "specular_reflectance", Vec3::ONE)? * 0.04;
-                m.glossy = Some(Glossy {
-                    specular: spec,
-                    roughness: alpha.clamp(0.01, 1.0),
-                });
-            }
-            "conductor" | "roughconductor" => {
-                m.albedo = Vec3::ZERO;
-                let alpha = self.scalar_prop(node, "alpha", if ty == "conductor" { 0.01 } else { 0.1 })?;
-                let spec = self.color(node, "specular_reflectance", Vec3::splat(0.9))?;
-                m.glossy = Some(Glossy {
-                    specular: spec.min(Vec3::splat(0.99)),
-                    roughness: alpha.clamp(0.01, 1.0),
-                });
-            }
-            other => {
-                self.warnings.push(format!(
-                    "{}:{}: bsdf {other:?} not supported, grey diffuse used",
-                    self.path.display(),
-                    self.line(node)
-                ));
-            }
-        }
-        if m.albedo.max_element() >= 1.0 {
-            self.warnings.push(format!(
-                "{}:{}: reflectance {} clamped below 1",
-                self.path.display(),
-                self.line(node),
-                m.albedo
-            ));
-            m.albedo = m.albedo.min(Vec3::splat(0.99));
-        }
-        Ok(m)
-    }
-
-    fn texture_or_color(&mut self, node: Node, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
-        if let Some(p) = self.prop(node, name)
-            && p.tag_name().name() == "texture"
-        {
-            self.warnings.push(format!(
-                "{}:{}: texture for {name} not supported, 0.5 used",
-                self.path.display(),
-                self.line(p)
-            ));
-            return Ok(Vec3::splat(0.5));
-        }
-        self.color(node, name, default)
     }
 
     fn transform(&self, node: Node) -> Result<Mat4, SceneError> {

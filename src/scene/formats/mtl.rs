@@ -118,7 +118,10 @@ pub(super) fn materials(
             .as_deref()
             .and_then(|s| load(s, Encoding::Srgb, warnings))
             .map(|(spec, t)| spec.map(t));
-        let kd = Vec3::from(m.diffuse.unwrap_or([if albedo_map.is_some() { 1.0 } else { 0.5 }; 3]));
+        let kd = Vec3::from(
+            m.diffuse
+                .unwrap_or([if albedo_map.is_some() { 1.0 } else { 0.5 }; 3]),
+        );
         // A texture's factor may be 1 (its lookups are capped); a colour's is kept below.
         let mut albedo = kd.max(Vec3::ZERO);
         if albedo_map.is_none() && kd.max_element() >= 1.0 {
@@ -203,7 +206,11 @@ pub(super) fn materials(
 /// texel size over the material's triangles.
 pub(super) fn scale_heights(materials: &mut [Material], meshes: &[Mesh]) {
     for (k, material) in materials.iter_mut().enumerate() {
-        let Some(map) = material.normal_map.as_mut().filter(|m| m.relief == Relief::Heights) else {
+        let Some(map) = material
+            .normal_map
+            .as_mut()
+            .filter(|m| m.relief == Relief::Heights)
+        else {
             continue;
         };
         let (w, h) = map.map.texture.size();
@@ -246,7 +253,10 @@ mod tests {
     fn map_statements_with_options() {
         let s = map_spec("-s 2 3 1 -o 0.5 0.25 -bm 0.3 -clamp on textures/my wall.png");
         assert_eq!(s.file, "textures/my wall.png");
-        assert_eq!((s.scale, s.offset, s.bump, s.clamp), (Vec2::new(2.0, 3.0), Vec2::new(0.5, 0.25), 0.3, true));
+        assert_eq!(
+            (s.scale, s.offset, s.bump, s.clamp),
+            (Vec2::new(2.0, 3.0), Vec2::new(0.5, 0.25), 0.3, true)
+        );
         assert_eq!(map_spec("  plain.jpg ").file, "plain.jpg");
         assert_eq!(map_spec("-imfchan r -bm 2 h.png").file, "h.png");
         // OBJ's v' = v·s + o, v up, seen with v down.

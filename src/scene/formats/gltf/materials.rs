@@ -49,16 +49,21 @@ impl Gltf<'_> {
                 match uri.split_once(";base64,").map(|(_, p)| base64(p)) {
                     Some(Ok(bytes)) => {
                         let name = format!("{} image {}", self.path.display(), image.index());
-                        self.images.get(ImageSource::Bytes { name, bytes: &bytes }, encoding)
+                        self.images
+                            .get(ImageSource::Bytes { name, bytes: &bytes }, encoding)
                     }
                     _ => Err(format!("{what}: a data URI that is not base64")),
                 }
             }
-            Source::Uri { uri, .. } if uri.contains("://") => {
-                Err(format!("{what}: URI {uri:?} (only data URIs and files beside the scene)"))
-            }
+            Source::Uri { uri, .. } if uri.contains("://") => Err(format!(
+                "{what}: URI {uri:?} (only data URIs and files beside the scene)"
+            )),
             Source::Uri { uri, .. } => {
-                let file: PathBuf = self.path.parent().unwrap_or(std::path::Path::new(".")).join(percent_decode(uri));
+                let file: PathBuf = self
+                    .path
+                    .parent()
+                    .unwrap_or(std::path::Path::new("."))
+                    .join(percent_decode(uri));
                 self.images.get(ImageSource::File(&file), encoding)
             }
         };
@@ -144,7 +149,9 @@ impl Gltf<'_> {
         if let Some(info) = pbr.metallic_roughness_texture()
             && let Some(t) = self.image(&info.texture(), Encoding::Linear)
         {
-            self.warn(format!("{name}: metallic-roughness texture taken by its mean (one lobe per material)"));
+            self.warn(format!(
+                "{name}: metallic-roughness texture taken by its mean (one lobe per material)"
+            ));
             let mean = t.mean();
             (metallic, roughness) = (metallic * mean.z, roughness * mean.y);
         }
@@ -195,7 +202,9 @@ impl Gltf<'_> {
             })
         });
         if m.occlusion_texture().is_some() {
-            self.warn(format!("{name}: occlusion texture ignored (the renderer computes occlusion)"));
+            self.warn(format!(
+                "{name}: occlusion texture ignored (the renderer computes occlusion)"
+            ));
         }
         let specular = Vec3::splat(0.04) * (1.0 - metallic) + base * metallic;
         Material {
