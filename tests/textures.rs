@@ -320,3 +320,46 @@ fn the_path_tracer_and_the_point_based_renderer_agree_on_a_textured_cut_out_box(
         got.rel_rmse
     );
 }
+
+/// No surfel stands on a cut-out's holes: baked, the card of the shadow
+/// test keeps surfels on its opaque texels only, about as many per area as
+/// the floor gets.
+#[test]
+fn no_surfel_stands_on_the_holes_of_a_cut_out() {
+    use pbgi::render::{BakeOptions, Lights, Tracer, bake};
+    let opaque = |x: usize, y: usize| (3..=4).contains(&x) || (4..=5).contains(&y);
+    let mask: Vec<[u8; 4]> = (0..64)
+        .map(|i| [255, 255, 255, if opaque(i % 8, i / 8) { 255 } else { 0 }])
+        .collect();
+    let texture = Texture::from_bytes("mask", 8, 8, mask, Encoding::Srgb, true).unwrap();
+    let card = Material {
+        alpha: Some(AlphaMap {
+            map: TextureMap::new(Arc::new(texture)),
+            channel: 3,
+            factor: 1.0,
+            cutoff: 0.5,
+        }),
+        ..Material::diffuse("card", Vec3::splat(0.5))
+    };
+    let camera = looking_down(Vec2::ZERO, 5.0, 40.0, 8);
+    let s = scene(vec![square(0.5, 1.0, 0)], vec![card], -Vec3::Z, camera);
+    let tracer = Tracer::new(&s);
+    let lights = Lights::new(&s);
+    let o = BakeOptions {
+        density: 20000.0,
+        ..Default::default()
+    };
+    let baked = bake(&s, &tracer, &lights, &o).unwrap();
+    let surfels = baked.cloud.surfels();
+    for p in surfels.iter().map(|s| s.position) {
+        let (tu, tv) = ((p.x + 0.5) * 8.0, (0.5 - p.y) * 8.0);
+        // Bilinear alpha reaches ½ on texel edges: the edges themselves are left out.
+        let near = |t: f32| ((t - 0.51).max(0.0) as usize)..=((t + 0.51).min(7.99) as usize);
+        let all_holes = near(tu).all(|x| near(tv).all(|y| !opaque(x, y)));
+        assert!(!all_holes, "a surfel at {p} on a hole (texel {tu:.2}, {tv:.2})");
+    }
+    // 28 of the 64 texels are opaque: that share of the card's 1 × 1 area.
+    let want = 20000.0 * 28.0 / 64.0;
+    let n = surfels.len() as f32;
+    assert!((n - want).abs() < 0.1 * want, "{n} surfels, {want} expected");
+}
