@@ -191,3 +191,91 @@ fn resolution_sizes_the_image_and_compare_follows() {
         assert!(!ok && text.contains("--resolution"), "{bad}: {text}");
     }
 }
+
+/// A Mitsuba file's `sample_count` and `max_depth` are used where the
+/// command line gives no `--spp` or `--bounces`, and the summary says which won.
+#[test]
+fn the_files_spp_and_max_depth_are_used_unless_the_command_line_says() {
+    let dir = scratch("settings");
+    let xml =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/textured-box/textured-box.xml");
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(args)
+            .arg(&xml)
+            .args(["--resolution", "16x16", "-o"])
+            .arg(dir.join("out.exr"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{text}");
+        text
+    };
+    // The file: `$spp` 64, `$max_depth` 3 (one bounce).
+    let text = run(&["render"]);
+    assert!(
+        text.contains(", 64 spp,") && text.contains(", 1 bounce(s)"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "settings: 64 spp from the file's sample_count; 1 bounce(s) from the file's max_depth 3"
+        ),
+        "{text}"
+    );
+    assert!(
+        !text.contains("sample_count=") && !text.contains("max_depth="),
+        "no longer named ignored: {text}"
+    );
+    let text = run(&["render", "--spp", "2", "--bounces", "0"]);
+    assert!(
+        text.contains(", 2 spp,") && text.contains(", 0 bounce(s)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("--spp 2 over the file's sample_count 64; --bounces 0 over the file's max_depth 3"),
+        "{text}"
+    );
+    let text = run(&["reference", "--spp", "2"]);
+    assert!(
+        text.contains("2 spp, 1 bounce(s)") && text.contains("1 bounce(s) from the file's max_depth 3"),
+        "{text}"
+    );
+}
+
+/// `--camera-origin`, `--camera-target` and `--fov` move the camera; a
+/// camera looking at its own origin is refused, named.
+#[test]
+fn the_camera_options_move_the_camera() {
+    let dir = scratch("camera");
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(["render", "--spp", "1", "--resolution", "24x24"])
+            .args(args)
+            .arg("-o")
+            .arg(dir.join("out.png"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+        (out.status.success(), text)
+    };
+    let digest = |text: &str| {
+        text.lines()
+            .find(|l| l.contains("image digest"))
+            .map(str::to_string)
+    };
+    let (ok, plain) = run(&[]);
+    assert!(ok, "{plain}");
+    for moved in [
+        &["--camera-origin", "0.3,0.2,3.9"][..],
+        &["--camera-target", "0.2,0,0"],
+        &["--fov", "60"],
+    ] {
+        let (ok, text) = run(moved);
+        assert!(ok && digest(&text) != digest(&plain), "{moved:?}: {text}");
+    }
+    let (ok, text) = run(&["--camera-origin", "0,0,0", "--camera-target", "0,0,0"]);
+    assert!(!ok && text.contains("camera"), "{text}");
+    let (ok, text) = run(&["--camera-origin", "1,2"]);
+    assert!(!ok && text.contains("X,Y,Z"), "{text}");
+}

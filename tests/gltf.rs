@@ -247,6 +247,7 @@ fn cornell_in_code() -> Scene {
             height: 256,
         },
         warnings: Vec::new(),
+        file_settings: Default::default(),
     }
 }
 
@@ -459,7 +460,7 @@ fn materials_emission_and_lights_map() {
         }
     );
     for w in [
-        "textures are not supported",
+        "none.png", // a missing texture: the material keeps its factors
         "spot light",
         "Lines",
         "without a material",

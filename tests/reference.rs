@@ -93,6 +93,7 @@ fn floor_under_sky(rho: f32, l: f32) -> Scene {
             height: 8,
         },
         warnings: vec![],
+        file_settings: Default::default(),
     }
 }
 

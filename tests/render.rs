@@ -301,6 +301,7 @@ fn open_box() -> Scene {
             height: 32,
         },
         warnings: vec![],
+        file_settings: Default::default(),
     }
 }
 

@@ -56,6 +56,7 @@ fn scene(meshes: Vec<Mesh>, materials: Vec<Material>, sun: Vec3, camera: Camera)
         environment: None,
         camera,
         warnings: Vec::new(),
+        file_settings: Default::default(),
     };
     scene.validate().unwrap();
     scene

@@ -385,6 +385,7 @@ mod tests {
             positions: corners.to_vec(),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             normals: None,
+            uvs: Vec::new(),
             material: 0,
             emission: Some(Vec3::splat(emission)),
         }
@@ -408,6 +409,7 @@ mod tests {
                 height: 8,
             },
             warnings: vec![],
+            file_settings: Default::default(),
         }
     }
 

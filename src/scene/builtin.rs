@@ -103,6 +103,7 @@ pub fn cornell_box() -> Scene {
             height: 256,
         },
         warnings: Vec::new(),
+        file_settings: Default::default(),
     }
 }
 

@@ -234,6 +234,7 @@ pub(super) fn sponza(dir: &Path, bump: bool) -> Result<Scene, SceneError> {
             height: 240,
         },
         warnings,
+        file_settings: Default::default(),
     })
 }
 
@@ -266,5 +267,6 @@ pub(super) fn cornell_box_embree(dir: &Path) -> Result<Scene, SceneError> {
             height: 256,
         },
         warnings: obj.warnings,
+        file_settings: Default::default(),
     })
 }

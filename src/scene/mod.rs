@@ -271,6 +271,28 @@ pub struct Scene {
     pub camera: Camera,
     /// Everything the loader read but does not support, named (never dropped silently).
     pub warnings: Vec<String>,
+    /// How the file asks to be rendered, where it says (the command line
+    /// uses these where its own options are not given).
+    pub file_settings: FileSettings,
+}
+
+/// Rendering settings a scene file asks for: Mitsuba's integrator
+/// `max_depth` and sampler `sample_count`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FileSettings {
+    /// Mitsuba's `max_depth` (1 emitters only, 2 direct light, 3 one
+    /// bounce, −1 unlimited).
+    pub max_depth: Option<i32>,
+    /// Samples per pixel.
+    pub sample_count: Option<u32>,
+}
+
+impl FileSettings {
+    /// Indirect bounces for `max_depth` (its path length less the camera
+    /// and the light's vertices: `max_depth − 2`, at least 0; −1 unlimited).
+    pub fn bounces(&self) -> Option<i32> {
+        self.max_depth.map(|d| if d < 0 { -1 } else { (d - 2).max(0) })
+    }
 }
 
 impl Scene {

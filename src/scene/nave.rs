@@ -557,5 +557,6 @@ pub fn nave() -> Scene {
             height: 240,
         },
         warnings: Vec::new(),
+        file_settings: Default::default(),
     }
 }

@@ -165,10 +165,10 @@ pub struct Settings {
     /// Microbuffer resolution of the gathers at receivers with a glossy lobe.
     #[arg(long, default_value_t = RenderOptions::default().glossy_microbuffer)]
     pub glossy_microbuffer: usize,
-    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba max_depth 3).
-    #[arg(long, default_value_t = RenderOptions::default().bounces,
-          value_parser = bounded_u32(0, MAX_BOUNCES), allow_negative_numbers = true)]
-    pub bounces: u32,
+    /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba
+    /// max_depth 3). Default: the scene file's max_depth, else 1.
+    #[arg(long, value_parser = bounded_u32(0, MAX_BOUNCES), allow_negative_numbers = true)]
+    pub bounces: Option<u32>,
     /// Surfels per unit area, instead of a budget (default for the named
     /// scenes, built for it: 2000).
     #[arg(long, conflicts_with = "surfels")]
@@ -198,7 +198,7 @@ impl Settings {
             glossy_max_solid_angle: self.glossy_max_solid_angle,
             glossy_microbuffer: self.glossy_microbuffer,
             glossy_light_offset: self.glossy_light_offset,
-            bounces: self.bounces,
+            bounces: self.bounces.unwrap_or(RenderOptions::default().bounces),
             spp,
             density: self.density.unwrap_or(RenderOptions::default().density),
             surfel_budget: self.surfels,
@@ -254,13 +254,14 @@ pub struct ReferenceArgs {
     /// Output image (.exr keeps linear radiance; .png is tonemapped). Default: SCENE-reference.exr.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Paths per pixel.
-    #[arg(long, default_value_t = 256, value_parser = bounded_u32(1, MAX_REFERENCE_SPP), allow_negative_numbers = true)]
-    pub spp: u32,
-    /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1 unlimited.
-    #[arg(long, default_value_t = 1, allow_hyphen_values = true,
+    /// Paths per pixel. Default: the scene file's sample_count, else 256.
+    #[arg(long, value_parser = bounded_u32(1, MAX_REFERENCE_SPP), allow_negative_numbers = true)]
+    pub spp: Option<u32>,
+    /// Indirect bounces: 0 direct only, 1 one bounce (as `pbgi render`), -1
+    /// unlimited. Default: the scene file's max_depth, else 1.
+    #[arg(long, allow_hyphen_values = true,
           value_parser = clap::value_parser!(i32).range(-1..=i64::from(MAX_BOUNCES)))]
-    pub bounces: i32,
+    pub bounces: Option<i32>,
     /// Which light the image holds: all, direct, or indirect (what the gather computes).
     #[arg(long, default_value = "all")]
     pub component: String,
@@ -270,9 +271,8 @@ pub struct ReferenceArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
-    /// Image size WxH instead of the scene's (as `pbgi render --resolution`).
-    #[arg(long, value_name = "WxH", value_parser = resolution)]
-    pub resolution: Option<(u32, u32)>,
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 #[derive(Args, Clone)]
@@ -292,9 +292,10 @@ pub struct CompareArgs {
     /// Also write the image, the reference and the signed error side by side as one PNG, the two exposed alike.
     #[arg(long)]
     pub side_by_side: Option<PathBuf>,
-    /// The size the images were rendered at, where not the scene's (`--resolution` of render and reference).
-    #[arg(long, value_name = "WxH", value_parser = resolution)]
-    pub resolution: Option<(u32, u32)>,
+    /// The view the images were rendered from, where not the scene's
+    /// (the `--resolution` and `--camera-*` given to render and reference).
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 #[derive(Args, Clone)]
@@ -307,10 +308,10 @@ pub struct RenderArgs {
     /// Traversal scheme: auto, scalar, single, packet or hybrid.
     #[arg(long, default_value = "auto", help_heading = DEVELOPER)]
     pub scheme: String,
-    /// Stratified camera samples per pixel (antialiasing; each gets direct light).
-    #[arg(long, default_value_t = RenderOptions::default().spp,
-          value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
-    pub spp: u32,
+    /// Stratified camera samples per pixel (antialiasing; each gets direct
+    /// light). Default: the scene file's sample_count, else 4.
+    #[arg(long, value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
+    pub spp: Option<u32>,
     /// Where the indirect light is gathered: "sparse" (a lattice of pixels,
     /// refined at edges and where the light changes, interpolated at each
     /// camera sample) or "all" (at every camera sample: the dense render, for
@@ -350,10 +351,8 @@ pub struct RenderArgs {
     /// image bit for bit on any machine and thread count).
     #[arg(long, default_value_t = RenderOptions::default().seed)]
     pub seed: u64,
-    /// Image size WxH instead of the scene's, the field of view kept on
-    /// the camera's axis (e.g. 1920x1080).
-    #[arg(long, value_name = "WxH", value_parser = resolution)]
-    pub resolution: Option<(u32, u32)>,
+    #[command(flatten)]
+    pub view: ViewArgs,
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -420,6 +419,34 @@ fn bounded_u32(lo: u32, hi: u32) -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(i64::from(lo)..=i64::from(hi))
 }
 
+/// The camera as the command line changes it: size, place, field of view.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ViewArgs {
+    /// Image size WxH instead of the scene's, the field of view kept on
+    /// the camera's axis (e.g. 1920x1080).
+    #[arg(long, value_name = "WxH", value_parser = resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Where the camera stands instead of the scene's (e.g. 0,1.5,4).
+    #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
+    pub camera_origin: Option<[f32; 3]>,
+    /// The point the camera looks at instead of the scene's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
+    pub camera_target: Option<[f32; 3]>,
+    /// Field of view in degrees on the camera's axis, instead of the scene's.
+    #[arg(long, value_name = "DEGREES")]
+    pub fov: Option<f32>,
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn point(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("{s:?}: expected three finite numbers X,Y,Z"))?;
+    <[f32; 3]>::try_from(v).map_err(|v| format!("{s:?}: {} numbers, expected X,Y,Z", v.len()))
+}
+
 /// The largest side `--resolution` accepts.
 const MAX_SIDE: u32 = 16_384;
 
@@ -474,7 +501,8 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         direct_samples: a.direct_samples,
         crop: a.crop,
         seed: a.seed,
-        ..a.settings.options(a.spp)?
+        ..a.settings
+            .options(a.spp.unwrap_or(RenderOptions::default().spp))?
     })
 }
 

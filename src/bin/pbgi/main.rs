@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use args::{
-    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, Res, options,
+    BenchArgs, Cli, Command, CompareArgs, EnvironmentArgs, ReferenceArgs, RenderArgs, Res, ViewArgs, options,
     parse_choices,
 };
 use clap::Parser;
@@ -115,8 +115,13 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     let clock = std::time::Instant::now();
     let mut scene = load_lit_scene(&a.scene, &a.environment)?;
     let read = clock.elapsed().as_secs_f64();
-    resize(&mut scene, a.resolution);
-    let opts = a.settings.for_scene(&a.scene, options(a)?);
+    set_view(&mut scene, &a.view)?;
+    let mut opts = a.settings.for_scene(&a.scene, options(a)?);
+    let won = Won::choose(&scene, a.spp, a.settings.bounces.map(|b| b as i32), true);
+    (opts.spp, opts.bounces) = (
+        won.spp.unwrap_or(opts.spp),
+        won.bounces.map_or(opts.bounces, |b| b as u32),
+    );
     let out_path = a
         .output
         .clone()
@@ -148,6 +153,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
     print_summary(&scene, &opts, &out, pool.current_num_threads());
+    won.print();
     println!("scene read in {read:.3} s (before the render's total)");
     if let Some((path, seconds)) = from {
         println!(
@@ -187,16 +193,32 @@ fn cmd_scenes() -> Res<()> {
     Ok(())
 }
 
-/// The camera at `--resolution`: its field of view stays on its axis.
-fn resize(scene: &mut pbgi::scene::Scene, resolution: Option<(u32, u32)>) {
-    if let Some((w, h)) = resolution {
-        (scene.camera.width, scene.camera.height) = (w, h);
+/// The camera as `--resolution`, `--camera-origin`, `--camera-target` and
+/// `--fov` change it (the field of view stays on its axis); an unusable
+/// camera is an error naming it.
+fn set_view(scene: &mut pbgi::scene::Scene, v: &ViewArgs) -> Res<()> {
+    let c = &mut scene.camera;
+    if let Some((w, h)) = v.resolution {
+        (c.width, c.height) = (w, h);
     }
+    if let Some(p) = v.camera_origin {
+        c.origin = glam::Vec3::from(p);
+    }
+    if let Some(p) = v.camera_target {
+        c.target = glam::Vec3::from(p);
+    }
+    if let Some(f) = v.fov {
+        c.fov_degrees = f;
+    }
+    scene.validate()?;
+    Ok(())
 }
 
 fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
     let mut scene = load_scene(&a.scene)?;
-    resize(&mut scene, a.resolution);
+    set_view(&mut scene, &a.view)?;
+    let won = Won::choose(&scene, a.spp, a.bounces, false);
+    let (spp, bounces) = (won.spp.unwrap_or(256), won.bounces.unwrap_or(1));
     let out_path = a
         .output
         .clone()
@@ -205,8 +227,8 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
     let pool = thread_pool(a.threads)?;
     let bar = progress_bar("rows", format!("path tracing {}", scene.name));
     let opts = ReferenceOptions {
-        spp: a.spp,
-        bounces: a.bounces,
+        spp,
+        bounces,
         component: a.component.parse()?,
         seed: a.seed,
     };
@@ -218,20 +240,81 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
         scene.name,
         scene.camera.width,
         scene.camera.height,
-        a.spp,
-        a.bounces,
+        spp,
+        bounces,
         opts.component,
         opts.seed,
         out.seconds,
         pool.current_num_threads()
     );
+    won.print();
     println!("wrote {}", out_path.display());
     Ok(())
 }
 
+/// Bounces `pbgi render` takes for a file's unlimited `max_depth` (each is
+/// a gather over every surfel): the ninth bounce off albedos of 0.5 carries
+/// 0.5⁸ ≈ 0.4 % of the first's light.
+const UNLIMITED_CAP: i32 = 8;
+
+/// The samples per pixel and bounces a render takes: the command line's,
+/// else the scene file's (`sample_count`, `max_depth`), else the command's
+/// defaults (`None`); and a line saying which won where the file asked.
+struct Won {
+    spp: Option<u32>,
+    bounces: Option<i32>,
+    notes: Vec<String>,
+}
+
+impl Won {
+    /// `bounded`: the point-based render, which takes a finite number of
+    /// bounces (unlimited becomes [`UNLIMITED_CAP`]).
+    fn choose(scene: &pbgi::scene::Scene, spp: Option<u32>, bounces: Option<i32>, bounded: bool) -> Won {
+        let file = scene.file_settings;
+        let mut notes = Vec::new();
+        let spp = match (spp, file.sample_count) {
+            (Some(n), Some(f)) => {
+                notes.push(format!("--spp {n} over the file's sample_count {f}"));
+                Some(n)
+            }
+            (None, Some(f)) => {
+                notes.push(format!("{f} spp from the file's sample_count"));
+                Some(f)
+            }
+            (n, None) => n,
+        };
+        let bounces = match (bounces, file.max_depth, file.bounces()) {
+            (Some(b), Some(d), _) => {
+                notes.push(format!("--bounces {b} over the file's max_depth {d}"));
+                Some(b)
+            }
+            (None, Some(d), Some(b)) => {
+                if b < 0 && bounded {
+                    // Each bounce is a gather over every surfel: a cap, named.
+                    notes.push(format!(
+                        "{UNLIMITED_CAP} bounces for the file's max_depth {d} (unlimited; --bounces N for more)"
+                    ));
+                    Some(UNLIMITED_CAP)
+                } else {
+                    notes.push(format!("{b} bounce(s) from the file's max_depth {d}"));
+                    Some(b)
+                }
+            }
+            (b, ..) => b,
+        };
+        Won { spp, bounces, notes }
+    }
+
+    fn print(&self) {
+        if !self.notes.is_empty() {
+            println!("settings: {}", self.notes.join("; "));
+        }
+    }
+}
+
 fn cmd_compare(a: &CompareArgs) -> Res<()> {
     let mut scene = load_scene(&a.scene)?;
-    resize(&mut scene, a.resolution);
+    set_view(&mut scene, &a.view)?;
     let image = read_exr(&a.image)?;
     let references = a.reference.iter().map(|p| read_exr(p)).collect::<Res<Vec<_>>>()?;
     // The emitter mask is the scene's camera's: an image of another scene
@@ -241,7 +324,7 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
     for (path, i) in images {
         if (i.width, i.height) != (w, h) {
             return Err(format!(
-                "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene, and their size with --resolution",
+                "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene, and their view with --resolution and --camera-*",
                 path.display(),
                 i.width,
                 i.height,

@@ -58,6 +58,7 @@ pub(super) fn single_file(
             "{}: no camera in the file, a default camera looks at it from +z",
             path.display()
         )],
+        file_settings: Default::default(),
     })
 }
 

@@ -105,6 +105,7 @@ pub fn read_gltf(path: &Path) -> Result<Scene, SceneError> {
         environment: None,
         camera,
         warnings: g.warnings,
+        file_settings: Default::default(),
     })
 }
 

@@ -12,7 +12,7 @@ use super::images::Images;
 use super::obj::read_obj;
 use super::ply::read_ply;
 use crate::scene::shapes::{cube_mesh, quad_mesh, sphere_mesh};
-use crate::scene::{Camera, FovAxis, Light, Material, Mesh, Scene, SceneError};
+use crate::scene::{Camera, FileSettings, FovAxis, Light, Material, Mesh, Scene, SceneError};
 
 /// Emitters: lights, and the environment (`constant`, `envmap`).
 mod bsdfs;
@@ -31,6 +31,8 @@ struct Mitsuba<'a> {
     lights: Vec<Light>,
     environment: Option<crate::environment::Environment>,
     camera: Option<Camera>,
+    /// The integrator's `max_depth` and the sampler's `sample_count`.
+    file_settings: FileSettings,
     /// Texture images, each decoded once.
     images: Images,
 }
@@ -55,6 +57,7 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
         meshes: Vec::new(),
         lights: Vec::new(),
         camera: None,
+        file_settings: FileSettings::default(),
         images: Images::default(),
     };
     if root.tag_name().name() != "scene" {
@@ -88,7 +91,11 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
             "shape" => m.shape(child)?,
             "emitter" => m.emitter(child)?,
             "sensor" => m.sensor(child)?,
-            "integrator" => m.ignored.push(format!("integrator {}", m.describe(child))),
+            "integrator" => {
+                let depth = m.integer(child, "max_depth")?;
+                m.file_settings.max_depth = depth.map(|d| d.clamp(-1, i64::from(i32::MAX)) as i32);
+                m.ignore_rest("integrator", child, &["max_depth"]);
+            }
             other => m.warnings.push(format!(
                 "{}:{}: <{other}> not supported, skipped",
                 path.display(),
@@ -123,6 +130,7 @@ pub(super) fn mitsuba(path: &Path, overrides: &HashMap<String, String>) -> Resul
         environment: m.environment,
         camera,
         warnings: m.warnings,
+        file_settings: m.file_settings,
     })
 }
 
@@ -139,10 +147,37 @@ impl Mitsuba<'_> {
         parse_err(self.path, self.line(node), message)
     }
 
-    fn describe(&self, node: Node) -> String {
+    /// The integer property `key` of `node` (`$name` substituted), if it has one.
+    fn integer(&self, node: Node, key: &str) -> Result<Option<i64>, SceneError> {
+        let Some(p) = self.prop(node, key) else {
+            return Ok(None);
+        };
+        let v = self.attr(p, "value")?;
+        let n = v.trim().parse::<i64>();
+        n.map(Some)
+            .map_err(|_| self.err(p, format!("{key} {v:?} is not a whole number")))
+    }
+
+    /// Names what `node` (an integrator, a sampler) sets beyond `used` as
+    /// ignored; a path integrator or a sampler with nothing else is not.
+    fn ignore_rest(&mut self, what: &str, node: Node, used: &[&str]) {
+        let rest = self.describe(node, used);
+        let ty = node.attribute("type").unwrap_or("?");
+        if !rest.ends_with("()")
+            || !matches!(
+                ty,
+                "path" | "independent" | "stratified" | "multijitter" | "ldsampler"
+            )
+        {
+            self.ignored.push(format!("{what} {rest}"));
+        }
+    }
+
+    fn describe(&self, node: Node, used: &[&str]) -> String {
         let props: Vec<String> = node
             .children()
             .filter(Node::is_element)
+            .filter(|c| !c.attribute("name").is_some_and(|n| used.contains(&n)))
             .filter_map(|c| {
                 // With `$name` parameters substituted where they resolve.
                 let value = match c.attribute("value") {
@@ -481,7 +516,11 @@ impl Mitsuba<'_> {
                         }
                     }
                 }
-                "sampler" => self.ignored.push(format!("sampler {}", self.describe(c))),
+                "sampler" => {
+                    let count = self.integer(c, "sample_count")?;
+                    self.file_settings.sample_count = count.map(|n| n.clamp(1, i64::from(u32::MAX)) as u32);
+                    self.ignore_rest("sampler", c, &["sample_count"]);
+                }
                 "transform" | "float" | "string" => {
                     if let Some(n) = c.attribute("name")
                         && !matches!(n, "fov" | "fov_axis" | "to_world")
