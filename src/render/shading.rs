@@ -68,12 +68,14 @@ pub(crate) fn shading_point(
         }
         None => ng,
     };
-    // A pixel's footprint: the cone's width at the hit, stretched by the
-    // slant (ray cones, as in Ray Tracing Gems ch. 20).
+    // A pixel's footprint: the cone's width at the hit (ray cones, as in
+    // Ray Tracing Gems ch. 20), and across a slant the width of a disk of
+    // the footprint ellipse's area: stretched by 1/√cos, not 1/cos, which
+    // blurs the unstretched axis by the whole slant.
     let at = SurfacePoint {
         triangle: hit.triangle,
         uv: hit.uv,
-        width: hit.t * spread / ng.dot(dir).abs().max(0.05),
+        width: hit.t * spread / ng.dot(dir).abs().max(0.0025).sqrt(),
     };
     if let Some(b) = &material.bump {
         normal = bumped(normal, position, b);
