@@ -60,9 +60,16 @@ fn shared_cornell_box_equals_the_builtin() {
             b.name
         );
     }
-    // Rendering settings are named, not dropped silently.
+    // Rendering settings are read (the integrator's and sampler's) or
+    // named, not dropped silently.
+    assert_eq!(
+        (file.file_settings.max_depth, file.file_settings.sample_count),
+        (Some(-1), Some(64))
+    );
     assert!(
-        file.warnings.iter().any(|w| w.contains("integrator path")),
+        file.warnings
+            .iter()
+            .any(|w| w.contains("film <rfilter type=box>")),
         "{:?}",
         file.warnings
     );
@@ -359,7 +366,7 @@ fn mitsuba_s_own_vector_and_point_forms_and_substituted_warnings() {
     use pbgi::scene::Light;
     let xml = r#"<scene version="3.0.0">
 <default name="spp" value="64"/>
-<integrator type="path"><integer name="max_depth" value="$spp"/></integrator>
+<integrator type="path"><integer name="max_depth" value="$spp"/><integer name="rr_depth" value="$spp"/></integrator>
 <emitter type="directional"><vector name="direction" x="0" y="-1" z="1"/><rgb name="irradiance" value="2"/></emitter>
 <emitter type="point"><point name="position" x="1" z="3"/></emitter>
 <shape type="rectangle"/>
@@ -381,13 +388,15 @@ fn mitsuba_s_own_vector_and_point_forms_and_substituted_warnings() {
         "{:?}",
         s.lights
     );
+    // The integrator's `$`-substituted max_depth is read, for the command line.
+    assert_eq!(s.file_settings.max_depth, Some(64), "{:?}", s.warnings);
     let ignored = s
         .warnings
         .iter()
         .find(|w| w.contains("ignored"))
-        .expect("the integrator is reported");
+        .expect("the rest of the integrator is reported");
     assert!(
-        ignored.contains("max_depth=64") && !ignored.contains('$'),
+        ignored.contains("rr_depth=64") && !ignored.contains("max_depth") && !ignored.contains('$'),
         "{ignored}"
     );
     let bad = r#"<scene version="3.0.0"><emitter type="point"><point name="position" x="one"/></emitter><shape type="rectangle"/></scene>"#;

@@ -364,3 +364,42 @@ fn no_surfel_stands_on_the_holes_of_a_cut_out() {
     let n = surfels.len() as f32;
     assert!((n - want).abs() < 0.1 * want, "{n} surfels, {want} expected");
 }
+
+/// A textured material on a mesh without texture coordinates (a Mitsuba
+/// `cube`) loads with a warning naming the material, and renders with the
+/// texture's mean.
+#[test]
+fn a_textured_mesh_without_coordinates_is_warned_of() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/textured-box");
+    let dir = std::env::temp_dir().join(format!("pbgi-textures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let xml = dir.join("cube.xml");
+    let png = data.join("pattern.png");
+    std::fs::write(
+        &xml,
+        format!(
+            r#"<scene version="3.0.0"><shape type="cube"><bsdf type="diffuse" id="painted">
+            <texture type="bitmap" name="reflectance"><string name="filename" value="{}"/></texture>
+            </bsdf></shape></scene>"#,
+            png.display()
+        ),
+    )
+    .unwrap();
+    let s = pbgi::scene::load(&xml).unwrap();
+    let m = &s.materials[s.meshes[0].material];
+    assert!(m.albedo_map.is_some() && s.meshes[0].uvs.is_empty());
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("material painted") && w.contains("no texture coordinate set 0")),
+        "{:?}",
+        s.warnings
+    );
+    let at = pbgi::scene::SurfacePoint {
+        triangle: 0,
+        uv: Vec2::new(0.2, 0.3),
+        width: 0.0,
+    };
+    let mean = m.albedo_map.as_ref().unwrap().texture.mean().truncate();
+    assert_eq!(m.albedo_at(&s.meshes[0], &at), mean);
+}

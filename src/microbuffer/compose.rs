@@ -465,7 +465,9 @@ pub(crate) fn irradiance(
 }
 
 /// Per pixel `∫ max(0, n·ω) dω` for local unit `n`, by the pixel's 4×4
-/// sub-sample directions (each a sixteenth of its solid angle).
+/// sub-sample directions (each a sixteenth of its solid angle). Inlined
+/// into the shading clones, as everything they run.
+#[inline(always)]
 fn tilted_weights(t: &Table, n: Vec3, out: &mut Vec<f32>) {
     out.clear();
     for (sub, omega) in t.sub.iter().zip(&t.solid_angle) {

@@ -8,6 +8,7 @@ use pbgi::TreeFile;
 use pbgi::render::bake_tree_reporting;
 
 use crate::args::{BakeArgs, Res, bake_options};
+use crate::overrides::Won;
 use crate::{StageBars, load_lit_scene, thread_pool};
 
 /// A tree file, read and checked, with the seconds that took.
@@ -25,7 +26,10 @@ pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
 
 pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let scene = load_lit_scene(&a.scene, &a.environment)?;
-    let opts = a.settings.for_scene(&a.scene, bake_options(a)?);
+    let mut opts = a.settings.for_scene(&a.scene, bake_options(a)?);
+    // The file's max_depth as `pbgi render` takes it: the tree serves that render.
+    let won = Won::choose(&scene, None, a.settings.bounces.map(|b| b as i32), true);
+    opts.bounces = won.bounces.map_or(opts.bounces, |b| b as u32);
     let out_path = a
         .output
         .clone()
@@ -56,6 +60,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
             String::new()
         }
     );
+    won.print();
     println!(
         "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
         file.cloud().len(),

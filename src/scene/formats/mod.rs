@@ -73,9 +73,43 @@ pub fn load_with(path: &Path, params: &HashMap<String, String>) -> Result<Scene,
         }
     };
     let mut scene = scene;
+    warn_missing_coordinates(&mut scene);
     scene.light_if_unlit();
     scene.validate()?;
     Ok(scene)
+}
+
+/// A mesh whose material has a texture on a coordinate set the mesh lacks
+/// (a PLY, a Mitsuba `cube`, an OBJ without `vt`) is warned of: its
+/// textures are taken by their mean, a normal map left out.
+fn warn_missing_coordinates(scene: &mut Scene) {
+    // Per material: the first such mesh, and how many.
+    let mut lacking: Vec<Option<(&str, usize, usize)>> = vec![None; scene.materials.len()];
+    for mesh in &scene.meshes {
+        let m = &scene.materials[mesh.material];
+        let sets = [
+            m.albedo_map.as_ref().map(|t| t.uv_set),
+            m.alpha.as_ref().map(|a| a.map.uv_set),
+            m.normal_map.as_ref().map(|n| n.map.uv_set),
+        ];
+        if let Some(set) = sets.into_iter().flatten().find(|&s| s >= mesh.uvs.len()) {
+            let entry = lacking[mesh.material].get_or_insert((mesh.name.as_str(), set, 0));
+            entry.2 += 1;
+        }
+    }
+    let warnings: Vec<String> = lacking
+        .iter()
+        .zip(&scene.materials)
+        .filter_map(|(l, m)| {
+            let (first, set, count) = (*l)?;
+            Some(format!(
+                "material {}: {count} mesh(es), the first {first}, have no texture coordinate set {set}: \
+                 their textures are taken by their mean, a normal map left out",
+                m.name
+            ))
+        })
+        .collect();
+    scene.warnings.extend(warnings);
 }
 
 /// A scene around a mesh file that names no material, camera or light: a
