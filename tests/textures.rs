@@ -106,7 +106,8 @@ fn a_textured_quad_shows_its_texels() {
             let (fx, fy) = ((px as f32 + 0.5) / 16.0 - 0.5, (py as f32 + 0.5) / 16.0 - 0.5);
             let (x0, y0) = (fx.floor(), fy.floor());
             let (tx, ty) = (fx - x0, fy - y0);
-            if tx < 1.0 / 32.0 || tx > 31.0 / 32.0 || ty < 1.0 / 32.0 || ty > 31.0 / 32.0 {
+            let inside = 1.0 / 32.0..=31.0 / 32.0;
+            if !inside.contains(&tx) || !inside.contains(&ty) {
                 continue; // the pixel straddles two cells
             }
             let (x, y) = (

@@ -473,8 +473,8 @@ fn tilted_weights(t: &Table, n: Vec3, out: &mut Vec<f32>) {
     for (sub, omega) in t.sub.iter().zip(&t.solid_angle) {
         let count = sub[0].len();
         let mut sum = 0.0f32;
-        for k in 0..count {
-            sum += (n.x * sub[0][k] + n.y * sub[1][k] + n.z * sub[2][k]).max(0.0);
+        for ((x, y), z) in sub[0].iter().zip(&sub[1]).zip(&sub[2]) {
+            sum += (n.x * x + n.y * y + n.z * z).max(0.0);
         }
         out.push(sum * (omega / count as f32));
     }

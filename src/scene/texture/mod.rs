@@ -330,7 +330,8 @@ impl Texture {
     #[inline]
     pub fn sample(&self, uv: Vec2, width: f32, wrap: [Wrap; 2]) -> Vec4 {
         let last = self.levels.len() - 1;
-        if !(width > 1.0) {
+        // A NaN width (a degenerate footprint) reads the image itself.
+        if width.is_nan() || width <= 1.0 {
             return self.bilinear(0, uv, wrap);
         }
         let lod = approx_log2(width).min(last as f32);
