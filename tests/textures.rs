@@ -62,6 +62,24 @@ fn scene(meshes: Vec<Mesh>, materials: Vec<Material>, sun: Vec3, camera: Camera)
     scene
 }
 
+/// A grey card cut out by an 8×8 mask: opaque where `opaque(x, y)` (texel
+/// column, row), in its alpha channel, cut at ½.
+fn card(opaque: impl Fn(usize, usize) -> bool) -> Material {
+    let mask: Vec<[u8; 4]> = (0..64)
+        .map(|i| [255, 255, 255, if opaque(i % 8, i / 8) { 255 } else { 0 }])
+        .collect();
+    let texture = Texture::from_bytes("mask", 8, 8, mask, Encoding::Srgb, true).unwrap();
+    Material {
+        alpha: Some(AlphaMap {
+            map: TextureMap::new(Arc::new(texture)),
+            channel: 3,
+            factor: 1.0,
+            cutoff: 0.5,
+        }),
+        ..Material::diffuse("card", Vec3::splat(0.5))
+    }
+}
+
 fn srgb(b: u8) -> f32 {
     let c = b as f64 / 255.0;
     (if c <= 0.04045 {
@@ -139,19 +157,9 @@ fn a_textured_quad_shows_its_texels() {
 #[test]
 fn a_cut_out_card_casts_its_masks_shadow() {
     let opaque = |x: usize, y: usize| (3..=4).contains(&x) || (4..=5).contains(&y) || (x >= 6 && y >= 6);
-    let mask: Vec<[u8; 4]> = (0..64)
-        .map(|i| [255, 255, 255, if opaque(i % 8, i / 8) { 255 } else { 0 }])
-        .collect();
-    let texture = Texture::from_bytes("mask", 8, 8, mask, Encoding::Srgb, true).unwrap();
     let card = Material {
-        alpha: Some(AlphaMap {
-            map: TextureMap::new(Arc::new(texture)),
-            channel: 3,
-            factor: 1.0,
-            cutoff: 0.5,
-        }),
         two_sided: true,
-        ..Material::diffuse("card", Vec3::splat(0.5))
+        ..card(opaque)
     };
     let floor = Material::diffuse("floor", Vec3::splat(0.8));
     // Card [−0.5, 0.5]² at z = 1; sun along (1, 0, −1): the shadow lies on [0.5, 1.5] × [−0.5, 0.5].
@@ -330,19 +338,7 @@ fn the_path_tracer_and_the_point_based_renderer_agree_on_a_textured_cut_out_box(
 fn no_surfel_stands_on_the_holes_of_a_cut_out() {
     use pbgi::render::{BakeOptions, Lights, Tracer, bake};
     let opaque = |x: usize, y: usize| (3..=4).contains(&x) || (4..=5).contains(&y);
-    let mask: Vec<[u8; 4]> = (0..64)
-        .map(|i| [255, 255, 255, if opaque(i % 8, i / 8) { 255 } else { 0 }])
-        .collect();
-    let texture = Texture::from_bytes("mask", 8, 8, mask, Encoding::Srgb, true).unwrap();
-    let card = Material {
-        alpha: Some(AlphaMap {
-            map: TextureMap::new(Arc::new(texture)),
-            channel: 3,
-            factor: 1.0,
-            cutoff: 0.5,
-        }),
-        ..Material::diffuse("card", Vec3::splat(0.5))
-    };
+    let card = card(opaque);
     let camera = looking_down(Vec2::ZERO, 5.0, 40.0, 8);
     let s = scene(vec![square(0.5, 1.0, 0)], vec![card], -Vec3::Z, camera);
     let tracer = Tracer::new(&s);
