@@ -595,3 +595,65 @@ fn mutated_files_never_panic() {
     }
     eprintln!("{loaded} of 400 mutated files still loaded; the rest were typed errors");
 }
+
+/// Textures of a GLB: an embedded PNG (a buffer view), the sampler's wrap
+/// modes, `KHR_texture_transform` (its `texCoord` over the reference's),
+/// a second coordinate set, alpha `MASK` at its cutoff.
+#[test]
+fn textures_samplers_transforms_and_coordinate_sets_map() {
+    use glam::Vec2;
+    use pbgi::scene::texture::Wrap;
+    let mut png = Vec::new();
+    let texels: Vec<u8> = [
+        [255, 0, 0, 255],
+        [0, 255, 0, 0],
+        [0, 0, 255, 255],
+        [255, 255, 255, 128],
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    image::RgbaImage::from_raw(2, 2, texels)
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let mut doc = Doc::default();
+    let p = doc.vec3(&[Vec3::ZERO, Vec3::X, Vec3::Y]);
+    let mut vec2 = |v: [[f32; 2]; 3]| {
+        let bytes: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let view = doc.view(&bytes);
+        doc.accessors.push(format!(
+            r#"{{"bufferView":{view},"componentType":5126,"count":3,"type":"VEC2"}}"#
+        ));
+        doc.accessors.len() - 1
+    };
+    let (uv0, uv1) = (vec2([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), vec2([[0.5; 2]; 3]));
+    let image = doc.view(&png);
+    let rest = format!(
+        r#""scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":{p},"TEXCOORD_0":{uv0},"TEXCOORD_1":{uv1}}},"material":0}}]}}],
+        "materials":[{{"name":"leaf","alphaMode":"MASK","alphaCutoff":0.3,"pbrMetallicRoughness":{{"metallicFactor":0,
+          "baseColorTexture":{{"index":0,"texCoord":1,"extensions":{{"KHR_texture_transform":{{"offset":[0.5,0],"scale":[2,3],"texCoord":0}}}}}}}}}}],
+        "textures":[{{"source":0,"sampler":0}}],"samplers":[{{"wrapS":33071,"wrapT":33648}}],
+        "images":[{{"bufferView":{image},"mimeType":"image/png"}}],
+        "extensionsUsed":["KHR_texture_transform"]"#
+    );
+    let s = load(&write("textured.glb", &doc.glb(&rest))).unwrap();
+    assert_eq!(s.meshes[0].uvs.len(), 2, "both coordinate sets");
+    assert_eq!(s.meshes[0].uvs[1][2], Vec2::splat(0.5));
+    let m = &s.materials[s.meshes[0].material];
+    let map = m.albedo_map.as_ref().expect("the base colour texture");
+    assert_eq!(map.texture.size(), (2, 2));
+    assert_eq!(map.uv_set, 0, "the transform's texCoord wins");
+    assert_eq!(map.wrap, [Wrap::Clamp, Wrap::Mirror]);
+    assert_eq!(map.transform.apply(Vec2::ZERO), Vec2::new(0.5, 0.0));
+    assert_eq!(map.transform.apply(Vec2::ONE), Vec2::new(2.5, 3.0));
+    assert_eq!(m.albedo, Vec3::ONE, "a texture's factor is not clamped");
+    let alpha = m.alpha.as_ref().expect("MASK with an alpha texture is a cut-out");
+    assert_eq!((alpha.channel, alpha.cutoff), (3, 0.3));
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("extensions ignored")),
+        "{:?}",
+        s.warnings
+    );
+}
