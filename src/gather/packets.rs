@@ -131,12 +131,7 @@ impl<'g, 't> Gatherer<'g, 't> {
     /// convolves: irradiance `E` (RGB) or occlusion (in every channel) per
     /// receiver. The buffers keep the splats for [`buffers`](Self::buffers).
     pub fn shade(&mut self, what: Convolution) -> Vec<Vec3> {
-        let bufs = &mut self.bufs[..self.receivers.len()];
-        for (b, r) in bufs.iter_mut().zip(&self.receivers) {
-            b.reset(r.position(), r.normal());
-        }
-        let g = self.gather;
-        self.cuts.shade(g.path.isa, g.tree(), bufs, what, g.near)
+        self.shade_tilted(what, std::iter::empty())
     }
 
     /// [`shade`](Self::shade), each receiver's irradiance convolved about
@@ -144,8 +139,10 @@ impl<'g, 't> Gatherer<'g, 't> {
     /// normal map's: [`MicroBuffer::tilt`]).
     pub fn shade_tilted(&mut self, what: Convolution, normals: impl Iterator<Item = Vec3>) -> Vec<Vec3> {
         let bufs = &mut self.bufs[..self.receivers.len()];
-        for ((b, r), n) in bufs.iter_mut().zip(&self.receivers).zip(normals) {
+        for (b, r) in bufs.iter_mut().zip(&self.receivers) {
             b.reset(r.position(), r.normal());
+        }
+        for ((b, r), n) in bufs.iter_mut().zip(&self.receivers).zip(normals) {
             if n != r.normal() {
                 b.tilt(n);
             }

@@ -75,7 +75,11 @@ pub(crate) fn shading_point(
     let at = SurfacePoint {
         triangle: hit.triangle,
         uv: hit.uv,
-        width: hit.t * spread / ng.dot(dir).abs().max(0.0025).sqrt(),
+        width: if material.is_textured() {
+            hit.t * spread / ng.dot(dir).abs().max(0.0025).sqrt()
+        } else {
+            0.0
+        },
     };
     if let Some(b) = &material.bump {
         normal = bumped(normal, position, b);

@@ -100,27 +100,6 @@ impl Material {
         }
     }
 
-    /// The albedo at `at` on `mesh`: `albedo` times the map's colour there
-    /// (averaged over the width `at` stands for), at most [`MAX_ALBEDO`].
-    #[inline]
-    pub fn albedo_at(&self, mesh: &Mesh, at: &SurfacePoint) -> Vec3 {
-        match &self.albedo_map {
-            None => self.albedo,
-            Some(map) => (self.albedo * map.sample(mesh, at).truncate()).min(Vec3::splat(MAX_ALBEDO)),
-        }
-    }
-
-    /// Whether the surface is there at `at` (no cut-out, or its alpha high enough).
-    #[inline]
-    pub fn opaque_at(&self, mesh: &Mesh, triangle: u32, uv: Vec2) -> bool {
-        self.alpha.as_ref().is_none_or(|a| a.opaque(mesh, triangle, uv))
-    }
-
-    /// Whether anything varies over the surface: a texture of any kind.
-    pub fn is_textured(&self) -> bool {
-        self.albedo_map.is_some() || self.alpha.is_some() || self.normal_map.is_some()
-    }
-
     /// The glossy lobe the shading evaluates, if the material has one.
     pub fn lobe(&self) -> Option<GlossyLobe> {
         self.glossy.map(|g| GlossyLobe {
@@ -440,6 +419,17 @@ impl Scene {
                 && !nm.scale.is_finite()
             {
                 return bad(format!("material {} normal map scale is not finite", m.name));
+            }
+            let maps = [
+                m.albedo_map.as_ref(),
+                m.alpha.as_ref().map(|a| &a.map),
+                m.normal_map.as_ref().map(|n| &n.map),
+            ];
+            if let Some(t) = maps.into_iter().flatten().find(|t| !t.transform.is_finite()) {
+                return bad(format!(
+                    "material {} texture {} has a coordinate transform that is not finite",
+                    m.name, t.texture.name
+                ));
             }
             if let Some(g) = &m.glossy
                 && !(g.specular.is_finite()

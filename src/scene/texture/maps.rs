@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::{Texture, Wrap};
-use crate::scene::Mesh;
+use crate::scene::{MAX_ALBEDO, Material, Mesh};
 
 /// An affine map of texture coordinates: `uv' = m · uv + offset`, `m`
 /// by columns (glTF's `KHR_texture_transform`, Mitsuba's `to_uv`).
@@ -52,6 +52,11 @@ impl UvTransform {
     #[inline(always)]
     fn linear(&self, v: Vec2) -> Vec2 {
         self.columns[0] * v.x + self.columns[1] * v.y
+    }
+
+    /// Whether every entry is a finite number.
+    pub fn is_finite(&self) -> bool {
+        self.columns.iter().all(|c| c.is_finite()) && self.offset.is_finite()
     }
 
     /// The map at `uv`.
@@ -242,5 +247,38 @@ impl NormalMap {
             }
         };
         tilted.try_normalize().unwrap_or(n)
+    }
+}
+
+/// A material's textures at a point.
+impl Material {
+    /// The albedo at `at` on `mesh`: `albedo` times the map's colour there
+    /// (averaged over the width `at` stands for), at most [`MAX_ALBEDO`].
+    #[inline]
+    pub fn albedo_at(&self, mesh: &Mesh, at: &SurfacePoint) -> Vec3 {
+        match &self.albedo_map {
+            None => self.albedo,
+            Some(map) => {
+                let a = self.albedo * map.sample(mesh, at).truncate();
+                // A non-finite lookup stays as it is, for the renderer's
+                // checks to name (`min` would turn a NaN into the cap).
+                if a.is_finite() {
+                    a.min(Vec3::splat(MAX_ALBEDO))
+                } else {
+                    a
+                }
+            }
+        }
+    }
+
+    /// Whether the surface is there at `at` (no cut-out, or its alpha high enough).
+    #[inline]
+    pub fn opaque_at(&self, mesh: &Mesh, triangle: u32, uv: Vec2) -> bool {
+        self.alpha.as_ref().is_none_or(|a| a.opaque(mesh, triangle, uv))
+    }
+
+    /// Whether anything varies over the surface: a texture of any kind.
+    pub fn is_textured(&self) -> bool {
+        self.albedo_map.is_some() || self.alpha.is_some() || self.normal_map.is_some()
     }
 }
