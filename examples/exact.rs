@@ -7,7 +7,7 @@
 //!     [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
 //!     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid]
 //!     [--offset 2e-5] [--min-ms 30] [--dump] [--class mid|edge|corner|window]
-//!     [--light-offset K] [--dark-inside]
+//!     [--light-offset K] [--dark-inside] [--sky-rays]
 //! ```
 //!
 //! Scenes: `light`, the closed room with a small bright ceiling light;
@@ -19,6 +19,9 @@
 //! `thin-shell` (closed walls 0.075 and 0.02 thick, the outside lit and a
 //! sky: no light of the outside's arrives inside). `--dark-inside` makes
 //! the room's own walls black: only what comes through the window lights it.
+//! `--sky-rays` takes the sky from rays against the scene itself
+//! (`exact::gather_with_rays`, as the renderer does), not from the part of
+//! each pixel the cut leaves open.
 //! Density `k` samples each 1/8-wide cell with k×k surfels (2: 6k surfels,
 //! 4: 25k, 8: 98k). Errors are in percent, relative per receiver; `µs` is
 //! the irradiance gather (traversal, splatting, convolution) per receiver,
@@ -35,11 +38,12 @@ use std::time::Instant;
 use glam::Vec3;
 use pbgi::Scheme;
 use pbgi::brdf::GlossyLobe;
-use pbgi::exact::{ExactScene, GatherSettings, Quantity, RoomSpec, gather, stats};
+use pbgi::exact::{ExactScene, GatherSettings, Quantity, RoomSpec, gather_with_rays, stats};
+use pbgi::microbuffer::NearField;
 
 const USAGE: &str = "usage: exact [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid] [--offset 2e-5]
-    [--min-ms 30] [--dump] [--class mid|edge|corner|window] [--light-offset K] [--dark-inside]";
+    [--min-ms 30] [--dump] [--class mid|edge|corner|window] [--light-offset K] [--dark-inside] [--sky-rays]";
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
     s.split(',').filter_map(|x| x.trim().parse().ok()).collect()
@@ -54,6 +58,7 @@ fn main() {
     let (mut lanes, mut jitter, mut offset, mut min_ms, mut dump) = (true, true, 2e-5f32, 30.0f64, false);
     let mut class = String::new();
     let mut dark = false;
+    let mut sky_rays = false;
     let mut light_offset = 0.0f32;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
@@ -76,6 +81,11 @@ fn main() {
             }
             "--dump" => {
                 dump = true;
+                i += 1;
+                continue;
+            }
+            "--sky-rays" => {
+                sky_rays = true;
                 i += 1;
                 continue;
             }
@@ -106,8 +116,13 @@ fn main() {
     };
     let has = |w: &str| what.iter().any(|x| x == w);
     println!(
-        "pipeline {}, surfels {}, receivers offset {offset}, light offset weight {light_offset}, glossy roughness {}; errors in % (rel. RMSE / mean bias)",
+        "pipeline {}, surfels {}, sky {}, receivers offset {offset}, light offset weight {light_offset}, glossy roughness {}; errors in % (rel. RMSE / mean bias)",
         if lanes { "16-lane" } else { "scalar" },
+        if sky_rays {
+            "by rays"
+        } else {
+            "what the cut leaves open"
+        },
         if jitter { "jittered" } else { "grid" },
         lobe.roughness
     );
@@ -164,6 +179,7 @@ fn main() {
         println!("{:22} | {h} | {h} | {h} |", "");
         for &k in &densities {
             let tree = scene.tree(k, jitter.then_some(7)).expect("valid surfels");
+            let rays = sky_rays.then_some(&scene as &dyn NearField);
             let count = scene.surfels(k, None).len();
             for &omega in &omegas {
                 for &n in &ns {
@@ -176,7 +192,7 @@ fn main() {
                         sky: scene.sky as f32,
                     };
                     let cell = |q: Quantity, exact: &[f64]| {
-                        let (v, _) = gather(&tree, &probes, q, &g).expect("gather");
+                        let (v, _) = gather_with_rays(&tree, &probes, q, &g, rays).expect("gather");
                         if dump {
                             for ((p, e), v) in probes.iter().zip(exact).zip(&v) {
                                 let x = p.position;
@@ -228,7 +244,8 @@ fn main() {
                     // Time: repeat the irradiance gather for at least `min_ms`.
                     let (mut runs, mut total) = (0usize, 0.0f64);
                     while runs == 0 || total * 1e3 < min_ms {
-                        let (_, t) = gather(&tree, &probes, Quantity::Irradiance, &g).expect("gather");
+                        let (_, t) =
+                            gather_with_rays(&tree, &probes, Quantity::Irradiance, &g, rays).expect("gather");
                         total += t.as_secs_f64();
                         runs += 1;
                     }

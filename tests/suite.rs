@@ -22,6 +22,7 @@ mod report;
 mod scene_loaders;
 mod scenes;
 mod shading_analytic;
+mod sky_rays;
 mod stability;
 mod surfel_budget;
 mod textures;

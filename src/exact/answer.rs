@@ -214,6 +214,12 @@ impl ExactScene {
         best
     }
 
+    /// Whether the ray from `p` along unit `d` leaves the scene (the sky
+    /// shows there).
+    pub fn escapes(&self, p: Vec3, d: Vec3) -> bool {
+        self.hit(p.as_dvec3(), d.as_dvec3().normalize()).is_none()
+    }
+
     /// Radiance seen from `p` along unit `d`; the sky's where the ray leaves.
     pub fn radiance(&self, p: DVec3, d: DVec3) -> f64 {
         self.hit(p, d)

@@ -9,7 +9,9 @@ use glam::Vec3;
 use super::Probe;
 use crate::brdf::GlossyLobe;
 use crate::environment::Environment;
-use crate::microbuffer::{Convolution, MicroBuffer, MicroBufferSink, PacketCut, shade_packet};
+use crate::microbuffer::{
+    Convolution, MicroBuffer, MicroBufferSink, NearField, PacketCut, shade_packet_near,
+};
 use crate::{CutOptions, Error, LANES, Receiver, Scheme, Traversal, Tree};
 
 /// What a gather computes.
@@ -51,6 +53,19 @@ pub fn gather(
     what: Quantity,
     g: &GatherSettings,
 ) -> Result<(Vec<f64>, Duration), Error> {
+    gather_with_rays(tree, probes, what, g, None)
+}
+
+/// [`gather`], with `rays` as each receiver's near field: the scene itself
+/// (an [`ExactScene`](super::ExactScene), which tells which rays escape)
+/// shows where the sky is, rather than what the cut leaves open.
+pub fn gather_with_rays(
+    tree: &Tree,
+    probes: &[Probe],
+    what: Quantity,
+    g: &GatherSettings,
+    rays: Option<&dyn NearField>,
+) -> Result<(Vec<f64>, Duration), Error> {
     let t = Traversal::new(
         tree,
         CutOptions {
@@ -79,10 +94,15 @@ pub fn gather(
         };
         if g.lanes && !matches!(what, Quantity::Glossy(_)) {
             t.run(g.scheme, chunk, &mut cut);
-            shade_packet(t.isa(), bufs, tree, &mut cut, conv, &mut values)?;
+            shade_packet_near(t.isa(), bufs, tree, &mut cut, conv, rays, &mut values)?;
             out.extend(values[..chunk.len()].iter().map(|v| v.x as f64));
         } else {
             t.run(g.scheme, chunk, &mut MicroBufferSink { tree, buffers: bufs });
+            if let Some(field) = rays {
+                for b in bufs.iter_mut() {
+                    b.set_near_field(tree, field);
+                }
+            }
             out.extend(bufs.iter().zip(pr).map(|(b, p)| match what {
                 Quantity::Irradiance => b.irradiance(tree).x as f64,
                 Quantity::Occlusion => b.occlusion(tree) as f64,
@@ -121,5 +141,21 @@ pub fn stats(gathered: &[f64], exact: &[f64]) -> Stats {
         rel_rmse: (s2 / n).sqrt(),
         bias: s1 / n,
         max,
+    }
+}
+
+/// The scene itself along a receiver's rays: which directions see the sky
+/// (its cells, holes let through). No near field: the leaves stay drawn.
+impl NearField for super::ExactScene {
+    fn trace(&self, _: Vec3, _: Vec3, _: Vec3, _: f32) -> Option<Vec3> {
+        None
+    }
+
+    fn near_leaves(&self) -> bool {
+        false
+    }
+
+    fn escapes(&self, origin: Vec3, _normal: Vec3, dir: Vec3) -> Option<bool> {
+        Some(self.escapes(origin, dir))
     }
 }

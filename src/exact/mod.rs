@@ -34,7 +34,7 @@ mod answer;
 mod gather;
 mod room;
 
-pub use gather::{GatherSettings, Quantity, Stats, gather, stats};
+pub use gather::{GatherSettings, Quantity, Stats, gather, gather_with_rays, stats};
 
 /// A rectangle `origin + s·e1 + t·e2` (`s, t ∈ [0, 1]`) cut into `cells[0]
 /// × cells[1]` cells, emitting towards `e1 × e2`.

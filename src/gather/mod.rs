@@ -122,8 +122,10 @@ pub struct GatherOptions {
     pub scheme: SchemeChoice,
     /// How the receivers are grouped into packets.
     pub order: ReceiverOrder,
-    /// What a receiver sees where the cut leaves its hemisphere open (the
-    /// microbuffer's uncovered pixels); `None`: black.
+    /// What a receiver sees where its hemisphere is open: the pixels whose
+    /// rays leave the scene, where the near field tells
+    /// ([`NearField::escapes`](crate::microbuffer::NearField::escapes)),
+    /// else the microbuffer's uncovered part; `None`: black.
     pub environment: Option<Arc<Environment>>,
     /// Worker threads of the gather's own pool; `None`: rayon's pool the
     /// call runs in (the global one, or the caller's `install`). The
@@ -264,7 +266,9 @@ impl<'t> Gather<'t> {
     /// This gather, drawing what lies within a few surfel radii of a
     /// receiver by rays into `field` ([`microbuffer::NearField`](crate::microbuffer::NearField)):
     /// where a receiver's cut holds a leaf of another surface that near,
-    /// those leaves give way to one ray per pixel.
+    /// those leaves give way to one ray per pixel; and, with an
+    /// environment, where `field` tells which rays escape, the sky shows
+    /// through the pixels whose rays do (`microbuffer::open`).
     pub fn with_near_field(mut self, field: &'t dyn NearField) -> Self {
         self.near = Some(field);
         self

@@ -9,6 +9,7 @@ use super::compose;
 pub(crate) use super::fragments::Fragments;
 use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
 use super::near::{self, Near, NearField};
+use super::open;
 use super::table::Table;
 use crate::brdf::GlossyLobe;
 use crate::cut::CutSink;
@@ -51,6 +52,11 @@ pub struct MicroBuffer {
     pub(super) scratch: compose::Scratch,
     /// What this receiver sees within a few surfel radii, by rays (`near`).
     pub(super) near: Option<Near>,
+    /// Per pixel, the part through which the environment shows, by rays
+    /// (`open`), if the receiver's field could tell (else empty): kept
+    /// from one receiver to the next, like the scratch.
+    pub(super) open: Vec<f32>,
+    pub(super) open_by_rays: bool,
     /// The normal irradiance is convolved about, in the local frame, where
     /// it is not the receiver's own (a normal map's).
     pub(super) shading: Option<Vec3>,
@@ -79,6 +85,8 @@ impl MicroBuffer {
             environment: None,
             scratch: compose::Scratch::default(),
             near: None,
+            open: Vec::new(),
+            open_by_rays: false,
             shading: None,
         })
     }
@@ -114,6 +122,7 @@ impl MicroBuffer {
         self.frame = [t, bt, n];
         self.frags.clear();
         self.near = None;
+        self.open_by_rays = false;
         self.shading = None;
     }
 
@@ -231,6 +240,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            open: self.open_by_rays.then_some(self.open.as_slice()),
             shading: self.shading,
         };
         // The sky from the fields, not `sky()`: that would borrow the whole
@@ -253,6 +263,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            open: self.open_by_rays.then_some(self.open.as_slice()),
             shading: self.shading,
         }
     }
@@ -301,6 +312,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
+            open: self.open_by_rays.then_some(self.open.as_slice()),
             shading: self.shading,
         };
         compose::occlusion(&self.table, &self.frags, tree, &site, &mut self.scratch)
@@ -310,15 +322,30 @@ impl MicroBuffer {
     /// and keeps it for the convolutions: where the splats so far hold a
     /// leaf of another surface within [`NEAR_RADII`](super::NEAR_RADII) of
     /// its radius, the leaves that near give way to one ray per pixel;
-    /// elsewhere nothing changes. Returns whether it needs one. Call it after
-    /// the last splat; [`reset`](Self::reset) forgets it.
+    /// elsewhere nothing changes. Where the buffer sees an environment and
+    /// `field` tells which rays escape ([`NearField::escapes`]), the open
+    /// part of each pixel is taken from rays (`open`), not from the splats'
+    /// coverage. Returns whether it needs a near field. Call it after the
+    /// last splat; [`reset`](Self::reset) forgets both.
     #[inline(always)]
     pub fn set_near_field(&mut self, tree: &Tree, field: &dyn NearField) -> bool {
         let nodes = self.frags.key.iter().map(
             #[inline(always)]
             |&k| (k & 0xFFFF_FFFF) as NodeId,
         );
-        self.near = near::near(&self.table, nodes, tree, self.position, &self.frame, field);
+        if field.near_leaves() {
+            self.near = near::near(&self.table, nodes, tree, self.position, &self.frame, field);
+        }
+        if self.environment.is_some() {
+            self.open_by_rays = open::open(
+                &self.table,
+                self.position,
+                &self.frame,
+                field,
+                &self.frags,
+                &mut self.open,
+            );
+        }
         self.near.is_some()
     }
 

@@ -107,6 +107,9 @@ pub(crate) struct Site<'a> {
     pub frame: [Vec3; 3],
     /// Leaves drawn by rays, and what each pixel's ray met (`near`).
     pub near: Option<&'a Near>,
+    /// Per pixel, the part through which the environment shows, by rays
+    /// (`open`); `None`: the part the splats leave uncovered.
+    pub open: Option<&'a [f32]>,
     /// The normal irradiance is convolved about (local frame), if not +z.
     pub shading: Option<Vec3>,
 }
@@ -446,6 +449,20 @@ pub(crate) fn irradiance(
     };
     let (cover, radiance) = (&scratch.cover, &scratch.radiance);
     let mut e = Vec3::ZERO;
+    if let (Some(open), Some(sky)) = (site.open, sky) {
+        // A pixel open all through shows the sky alone; one open in part,
+        // its splats and the sky through that part.
+        for (p, ((l, w), o)) in radiance.iter().zip(weights).zip(open).enumerate() {
+            if *o < 1.0 {
+                e += *l * *w;
+            }
+            if *o > 0.0 {
+                e += sky.at(t, p) * (*o * *w);
+            }
+        }
+        brightest = brightest.max(sky.environment.max_radiance());
+        return at_most(e, brightest * std::f32::consts::PI);
+    }
     for (l, w) in radiance.iter().zip(weights) {
         e += *l * *w;
     }
@@ -554,6 +571,18 @@ pub(crate) fn reflected(
 ) -> Vec3 {
     compose(t, frags, tree, site, true, c);
     let mut e = Vec3::ZERO;
+    if let (Some(open), Some(sky)) = (site.open, sky) {
+        // As in `irradiance`: the sky through each pixel's open part.
+        for (p, ((l, w), o)) in c.radiance.iter().zip(&t.cos_weight).zip(open).enumerate() {
+            if *o < 1.0 && *l != Vec3::ZERO {
+                e += *l * f(p) * *w;
+            }
+            if *o > 0.0 {
+                e += sky.at(t, p) * f(p) * (*o * *w);
+            }
+        }
+        return e;
+    }
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {
             e += *l * f(p) * *w;

@@ -26,7 +26,8 @@
 //! occlusion or glossy radiance. The files, in data-flow order: `table`
 //! (the map and its per-pixel tables), `locate` (where a node falls),
 //! `fragments` (what a splat leaves in a pixel), `buffer` (a receiver's
-//! fragments and the convolutions' entry points), `samples` (a fragment at
+//! fragments and the convolutions' entry points), `near` and `open` (what
+//! rays from the receiver meet: the near field, the sky), `samples` (a fragment at
 //! the pixel's sub-samples), `compose`
 //! (fragments to pixels, pixels to irradiance, occlusion or glossy), `plan`
 //! (a splat's class and footprint), `draw` (the scalar draw), `tiles` (the
@@ -39,6 +40,7 @@ mod draw;
 mod fragments;
 mod locate;
 mod near;
+mod open;
 mod plan;
 mod samples;
 mod shade;

@@ -61,6 +61,22 @@ pub trait NearField: Sync {
     /// receiver with unit `normal`) sends back along `−dir`, if that surface
     /// is within `t_max`; `None` if nothing is.
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3>;
+
+    /// Whether leaves within [`NEAR_RADII`] give way to [`trace`](Self::trace)'s
+    /// rays: `false` for a field that only answers [`escapes`](Self::escapes).
+    fn near_leaves(&self) -> bool {
+        true
+    }
+
+    /// Whether the ray along unit `dir` from `origin` (a receiver with unit
+    /// `normal`) meets no surface at any distance, so that the environment
+    /// shows there; `None` (the default) where the field cannot tell, and
+    /// the microbuffer's open part `1 − coverage` stands for it. Asked only
+    /// of receivers that see an environment (`microbuffer::open`).
+    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
+        let _ = (origin, normal, dir);
+        None
+    }
 }
 
 /// One receiver's near field: the nodes its composition leaves out, and per

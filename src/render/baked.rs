@@ -10,8 +10,9 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::bake::{BakeOptions, bake_reporting};
-use super::bounces::gather_bounce;
+use super::bounces::{gather_bounce, gather_sky};
 use super::light::Lights;
+use super::near::SkyRays;
 use super::options::{Gathers, RenderOptions};
 use super::output::{PreTimings, RenderError, Report, Stage};
 use super::trace::Tracer;
@@ -190,9 +191,17 @@ pub(super) fn build(
         } else {
             let dark_tree = tree(&dark, times);
             let clock = Instant::now();
-            cloud = gather_bounce(&dark, &direct, &baked.albedo, &dark_tree, &gopts, &|d, n| {
-                report(SKY, d, n)
-            })?;
+            // Which directions see the sky, by rays (`microbuffer::open`):
+            // the dark tree only groups the surfels.
+            cloud = gather_sky(
+                &dark,
+                &direct,
+                &baked.albedo,
+                &dark_tree,
+                &gopts,
+                &SkyRays(tracer),
+                &|d, n| report(SKY, d, n),
+            )?;
             times.gathers += clock.elapsed().as_secs_f64();
             direct = cloud.surfels().iter().map(|s| s.radiance).collect();
         }
@@ -200,9 +209,16 @@ pub(super) fn build(
     let mut built = tree(&cloud, times);
     for _ in 1..opts.bounces.max(1) {
         let clock = Instant::now();
-        cloud = gather_bounce(&cloud, &direct, &baked.albedo, &built, &gopts, &|d, n| {
-            report(BOUNCE, d, n)
-        })?;
+        let rays = SkyRays(tracer);
+        cloud = gather_bounce(
+            &cloud,
+            &direct,
+            &baked.albedo,
+            &built,
+            &gopts,
+            Some(&rays),
+            &|d, n| report(BOUNCE, d, n),
+        )?;
         times.gathers += clock.elapsed().as_secs_f64();
         built = tree(&cloud, times);
     }

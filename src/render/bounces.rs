@@ -5,8 +5,10 @@ use glam::Vec3;
 
 use crate::error::Error;
 use crate::gather::{Gather, GatherOptions};
+use crate::microbuffer::{MicroBuffer, NearField};
 use crate::points::{PointCloud, Surfel};
 use crate::tree::{NodeId, Tree};
+use rayon::prelude::*;
 
 /// Surfels that share one gather of the environment's light or of an
 /// extra bounce: a subtree of at most this many, flat within [`FLAT`]
@@ -26,25 +28,76 @@ const FLAT: f32 = 0.95;
 /// One more bounce at the surfels: each surfel's radiance becomes its direct
 /// part plus `albedo/π · E`, with `E` gathered from the current cloud once
 /// per group of at most [`SURFEL_GROUP`] surfels (a subtree of `tree` whose
-/// normals lie within [`FLAT`]'s cone, gathered at its centroid).
+/// normals lie within [`FLAT`]'s cone, gathered at its centroid), with
+/// `rays` as the gather's near field (the sky by rays) if given.
 pub(super) fn gather_bounce(
     cloud: &PointCloud,
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
     opts: &GatherOptions,
+    rays: Option<&dyn NearField>,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PointCloud, Error> {
     let gather = Gather::new(tree, opts)?;
+    let gather = match rays {
+        Some(field) => gather.with_near_field(field),
+        None => gather,
+    };
+    add_gathered(cloud, direct, albedo, tree, tick, |part| gather.irradiance(part))
+}
+
+/// The environment's light at the surfels, grouped as [`gather_bounce`]'s,
+/// by rays alone (`rays` tells which directions leave the scene): with the
+/// sky by rays, the surfels are no occluders the gather needs, so no cut
+/// is taken and nothing is splatted (the same light as a gather over the
+/// surfels made black, without its traversal and composition).
+pub(super) fn gather_sky(
+    cloud: &PointCloud,
+    direct: &[Vec3],
+    albedo: &[Vec3],
+    tree: &Tree,
+    opts: &GatherOptions,
+    rays: &dyn NearField,
+    tick: &(dyn Fn(usize, usize) + Sync),
+) -> Result<PointCloud, Error> {
+    let proto = MicroBuffer::new(opts.microbuffer)?.with_environment(opts.environment.clone());
+    let empty = Tree::default();
+    add_gathered(cloud, direct, albedo, tree, tick, |part| {
+        Ok(part
+            .par_chunks(64)
+            .flat_map_iter(|chunk| {
+                let mut mb = proto.clone();
+                let empty = &empty;
+                chunk.iter().map(move |&(p, n)| {
+                    mb.reset(p, n);
+                    mb.set_near_field(empty, rays);
+                    mb.irradiance_inline(empty)
+                })
+            })
+            .collect())
+    })
+}
+
+/// Each surfel's radiance: its direct part plus `albedo/π · E`, `E` from
+/// `gather` at its group's receiver (in runs of neighbours, the groups in
+/// tree order, a progress report after each).
+fn add_gathered(
+    cloud: &PointCloud,
+    direct: &[Vec3],
+    albedo: &[Vec3],
+    tree: &Tree,
+    tick: &(dyn Fn(usize, usize) + Sync),
+    gather: impl Fn(&[(Vec3, Vec3)]) -> Result<Vec<Vec3>, Error>,
+) -> Result<PointCloud, Error> {
     let surfels = cloud.surfels();
     let (receivers, members) = groups(tree, surfels, SURFEL_GROUP);
-    // In runs of neighbours (the groups come in tree order), a progress
-    // report after each; a receiver's light is the same in any packet.
+    // A receiver's light is the same in any packet or run.
     let run = (receivers.len() / 64).max(4096);
     let mut gathered = Vec::with_capacity(receivers.len());
     tick(0, receivers.len());
     for part in receivers.chunks(run) {
-        gathered.extend(gather.irradiance(part)?);
+        gathered.extend(gather(part)?);
         tick(gathered.len(), receivers.len());
     }
     let mut e = vec![Vec3::ZERO; surfels.len()];

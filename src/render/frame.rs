@@ -224,7 +224,9 @@ impl<'s> Frame<'s> {
     /// `g`, with this frame's ray tracer as its near field where
     /// [`near_field`](Self::near_field) says so.
     fn with_near_field<'a>(&'a self, g: Gather<'a>) -> Gather<'a> {
-        if self.near_field() {
+        // With an environment, also for the sky by rays (`near_leaves`
+        // says whether the leaves give way too).
+        if self.near_field() || self.environment.is_some() {
             g.with_near_field(self)
         } else {
             g

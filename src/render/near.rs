@@ -30,7 +30,36 @@ pub struct NearRays<'a> {
     pub seed: u64,
 }
 
+/// Whether the ray from a receiver at `origin` (unit `normal`) along `dir`
+/// leaves the scene: nothing at any distance, cut-outs' holes let through.
+fn escapes(tracer: &Tracer, origin: Vec3, normal: Vec3, dir: Vec3) -> bool {
+    !tracer.occluded(origin + normal * tracer.epsilon(), dir, f32::INFINITY)
+}
+
+/// The sky by rays alone, for gathers with no near field (the surfels'
+/// gathers of the environment's light): which directions leave the scene.
+#[derive(Clone, Copy)]
+pub(crate) struct SkyRays<'a>(pub &'a Tracer);
+
+impl NearField for SkyRays<'_> {
+    fn trace(&self, _: Vec3, _: Vec3, _: Vec3, _: f32) -> Option<Vec3> {
+        None
+    }
+
+    fn near_leaves(&self) -> bool {
+        false
+    }
+
+    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
+        Some(escapes(self.0, origin, normal, dir))
+    }
+}
+
 impl NearField for NearRays<'_> {
+    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
+        Some(escapes(self.tracer, origin, normal, dir))
+    }
+
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {
         let o = origin + normal * self.tracer.epsilon();
         let hit = self.tracer.closest(o, dir, t_max)?;
@@ -78,6 +107,15 @@ impl NearField for NearRays<'_> {
 }
 
 impl NearField for Frame<'_> {
+    fn near_leaves(&self) -> bool {
+        self.near_field()
+    }
+
+    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
+        // Occlusion sees no sky.
+        (!self.opts.ao).then(|| escapes(&self.tracer, origin, normal, dir))
+    }
+
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {
         if self.opts.ao {
             // Occlusion needs the hit alone.
