@@ -62,7 +62,11 @@ fn cornell_box_under_a_sky() -> pbgi::scene::Scene {
 
 #[test]
 fn images_of_every_scheme_and_path_are_bit_identical() {
-    for scene in [small(cornell_box()), small(cornell_box_glossy()), cornell_box_under_a_sky()] {
+    for scene in [
+        small(cornell_box()),
+        small(cornell_box_glossy()),
+        cornell_box_under_a_sky(),
+    ] {
         for v in 0..3 {
             same_image_everywhere(&scene, v);
         }

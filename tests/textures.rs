@@ -277,7 +277,7 @@ fn a_normal_mapped_plane_shades_as_its_tilted_normal() {
 
 /// The path tracer and the point-based renderer agree on the textured box
 /// of `tests/data/textured-box` (a bitmap back wall, a tiled checker floor,
-/// a cut-out card: Mitsuba's own XML, which Mitsuba 3 renders within 0.3 %
+/// a cut-out card: Mitsuba's own XML, which Mitsuba 3 renders within 1.0 %
 /// of the path tracer, `scripts/mitsuba-textured.py`), pixel by pixel as on
 /// the Cornell box (`reference::point_based_and_path_traced_cornell_boxes_agree_pixel_by_pixel`):
 /// within the two images' noise and the gather's error, up to 4 % of the

@@ -170,7 +170,7 @@ pub(super) fn build(
     };
     let scheme = opts.scheme.resolve(LANES);
     let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
-    let mut direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+    let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
     let mut cloud = baked.cloud;
     if environment.is_some() {
         // The environment's light at the surfels, gathered with the
@@ -203,7 +203,10 @@ pub(super) fn build(
                 &|d, n| report(SKY, d, n),
             )?;
             times.gathers += clock.elapsed().as_secs_f64();
-            direct = cloud.surfels().iter().map(|s| s.radiance).collect();
+            // `direct` stays the sun's and the lights' alone: each extra
+            // bounce below gathers the sky again with the surfels' light
+            // (taken as part of the direct light, the sky's first bounce
+            // came in twice: the atrium at `--bounces 2` +8.1 %).
         }
     }
     let mut built = tree(&cloud, times);
