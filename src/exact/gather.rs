@@ -36,7 +36,7 @@ pub struct GatherSettings {
     pub light_offset: f32,
     /// Microbuffer resolution N.
     pub resolution: usize,
-    /// The 16-lane shading pipeline ([`shade_packet`], what the renderer
+    /// The 16-lane shading pipeline ([`shade_packet`](crate::microbuffer::shade_packet), what the renderer
     /// runs) rather than the scalar one ([`MicroBufferSink`]).
     pub lanes: bool,
     /// Traversal scheme.

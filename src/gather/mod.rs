@@ -124,7 +124,7 @@ pub struct GatherOptions {
     pub order: ReceiverOrder,
     /// What a receiver sees where its hemisphere is open: the pixels whose
     /// rays leave the scene, where the near field tells
-    /// ([`NearField::escapes`](crate::microbuffer::NearField::escapes)),
+    /// ([`NearField::escapes`]),
     /// else the microbuffer's uncovered part; `None`: black.
     pub environment: Option<Arc<Environment>>,
     /// Worker threads of the gather's own pool; `None`: rayon's pool the

@@ -38,6 +38,7 @@ use std::simd::prelude::*;
 
 use super::fragments::Fragments;
 use super::near::Near;
+use super::open;
 use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, hidden_by, lanes, wholly_behind};
 use super::table::Table;
 use crate::environment::Environment;
@@ -107,8 +108,7 @@ pub(crate) struct Site<'a> {
     pub frame: [Vec3; 3],
     /// Leaves drawn by rays, and what each pixel's ray met (`near`).
     pub near: Option<&'a Near>,
-    /// Per pixel, the part through which the environment shows, by rays
-    /// (`open`); `None`: the part the splats leave uncovered.
+    /// Per pixel, its open part by rays (`open`); `None`: `1 − coverage`.
     pub open: Option<&'a [f32]>,
     /// The normal irradiance is convolved about (local frame), if not +z.
     pub shading: Option<Vec3>,
@@ -425,7 +425,7 @@ fn brightest_of(tree: &Tree, node: u32) -> Vec3 {
 
 /// Irradiance `Σ radiance·∫cos dω` over the pixels, in pixel order, plus
 /// what `sky` (radiance toward pixel `p`, and its largest) sends through the
-/// open part `1 − coverage` of the pixels; at most `π` times the brightest
+/// open part of the pixels (by rays, `open`, else `1 − coverage`); at most `π` times the brightest
 /// radiance splatted or seen: the unclamped layers of a receiver enclosed by
 /// surfaces whose splats overlap may cover a little more than the
 /// hemisphere, and where that radiance is uniform the exact answer is the
@@ -450,16 +450,7 @@ pub(crate) fn irradiance(
     let (cover, radiance) = (&scratch.cover, &scratch.radiance);
     let mut e = Vec3::ZERO;
     if let (Some(open), Some(sky)) = (site.open, sky) {
-        // A pixel open all through shows the sky alone; one open in part,
-        // its splats and the sky through that part.
-        for (p, ((l, w), o)) in radiance.iter().zip(weights).zip(open).enumerate() {
-            if *o < 1.0 {
-                e += *l * *w;
-            }
-            if *o > 0.0 {
-                e += sky.at(t, p) * (*o * *w);
-            }
-        }
+        let e = open::light_and_sky(radiance, weights, open, |p| sky.at(t, p), |_| Vec3::ONE);
         brightest = brightest.max(sky.environment.max_radiance());
         return at_most(e, brightest * std::f32::consts::PI);
     }
@@ -572,16 +563,7 @@ pub(crate) fn reflected(
     compose(t, frags, tree, site, true, c);
     let mut e = Vec3::ZERO;
     if let (Some(open), Some(sky)) = (site.open, sky) {
-        // As in `irradiance`: the sky through each pixel's open part.
-        for (p, ((l, w), o)) in c.radiance.iter().zip(&t.cos_weight).zip(open).enumerate() {
-            if *o < 1.0 && *l != Vec3::ZERO {
-                e += *l * f(p) * *w;
-            }
-            if *o > 0.0 {
-                e += sky.at(t, p) * f(p) * (*o * *w);
-            }
-        }
-        return e;
+        return open::light_and_sky(&c.radiance, &t.cos_weight, open, |p| sky.at(t, p), f);
     }
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {

@@ -79,3 +79,26 @@ pub(super) fn open(
     }
     true
 }
+
+/// `Σ f(p)·w(p)·(L(p) + sky(p)·open(p))` in pixel order, `L(p)` the
+/// splats' light in pixel `p` where it is not open all through (a pixel
+/// open all through shows the sky alone) and `w` its cosine weight.
+#[inline(always)]
+pub(super) fn light_and_sky(
+    radiance: &[Vec3],
+    weights: &[f32],
+    open: &[f32],
+    sky: impl Fn(usize) -> Vec3,
+    f: impl Fn(usize) -> Vec3,
+) -> Vec3 {
+    let mut e = Vec3::ZERO;
+    for (p, ((l, w), o)) in radiance.iter().zip(weights).zip(open).enumerate() {
+        if *o < 1.0 && *l != Vec3::ZERO {
+            e += *l * f(p) * *w;
+        }
+        if *o > 0.0 {
+            e += sky(p) * f(p) * (*o * *w);
+        }
+    }
+    e
+}

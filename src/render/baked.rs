@@ -10,9 +10,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::bake::{BakeOptions, bake_reporting};
-use super::bounces::{gather_bounce, gather_sky};
+use super::bounces::{SkyRays, gather_bounce, gather_sky};
 use super::light::Lights;
-use super::near::SkyRays;
 use super::options::{Gathers, RenderOptions};
 use super::output::{PreTimings, RenderError, Report, Stage};
 use super::trace::Tracer;

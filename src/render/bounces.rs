@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::trace::Tracer;
 use crate::error::Error;
 use crate::gather::{Gather, GatherOptions};
 use crate::microbuffer::{MicroBuffer, NearField};
@@ -116,6 +117,25 @@ fn add_gathered(
         })
         .collect();
     PointCloud::new(next)
+}
+
+/// The sky by rays alone, for the surfels' gathers (they have no near
+/// field): which directions leave the scene.
+#[derive(Clone, Copy)]
+pub(super) struct SkyRays<'a>(pub &'a Tracer);
+
+impl NearField for SkyRays<'_> {
+    fn trace(&self, _: Vec3, _: Vec3, _: Vec3, _: f32) -> Option<Vec3> {
+        None
+    }
+
+    fn near_leaves(&self) -> bool {
+        false
+    }
+
+    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
+        Some(self.0.escapes(origin, normal, dir))
+    }
 }
 
 /// The receivers of grouped gathers and each one's surfels: the largest

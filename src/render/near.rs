@@ -30,34 +30,9 @@ pub struct NearRays<'a> {
     pub seed: u64,
 }
 
-/// Whether the ray from a receiver at `origin` (unit `normal`) along `dir`
-/// leaves the scene: nothing at any distance, cut-outs' holes let through.
-fn escapes(tracer: &Tracer, origin: Vec3, normal: Vec3, dir: Vec3) -> bool {
-    !tracer.occluded(origin + normal * tracer.epsilon(), dir, f32::INFINITY)
-}
-
-/// The sky by rays alone, for gathers with no near field (the surfels'
-/// gathers of the environment's light): which directions leave the scene.
-#[derive(Clone, Copy)]
-pub(crate) struct SkyRays<'a>(pub &'a Tracer);
-
-impl NearField for SkyRays<'_> {
-    fn trace(&self, _: Vec3, _: Vec3, _: Vec3, _: f32) -> Option<Vec3> {
-        None
-    }
-
-    fn near_leaves(&self) -> bool {
-        false
-    }
-
-    fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
-        Some(escapes(self.0, origin, normal, dir))
-    }
-}
-
 impl NearField for NearRays<'_> {
     fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
-        Some(escapes(self.tracer, origin, normal, dir))
+        Some(self.tracer.escapes(origin, normal, dir))
     }
 
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {
@@ -113,7 +88,7 @@ impl NearField for Frame<'_> {
 
     fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
         // Occlusion sees no sky.
-        (!self.opts.ao).then(|| escapes(&self.tracer, origin, normal, dir))
+        (!self.opts.ao).then(|| self.tracer.escapes(origin, normal, dir))
     }
 
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {

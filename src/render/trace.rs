@@ -199,6 +199,13 @@ impl Tracer {
         })
     }
 
+    /// Whether the ray from a receiver at `origin` (unit `normal`) along
+    /// `dir` leaves the scene: nothing at any distance (cut-outs' holes let
+    /// it through), so that the environment shows there.
+    pub fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> bool {
+        !self.occluded(origin + normal * self.epsilon, dir, f32::INFINITY)
+    }
+
     /// Whether anything lies along `origin + t·dir`, `t ∈ (0, t_max)`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         let Some(bvh) = self.bvh.as_ref() else {
