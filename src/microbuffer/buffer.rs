@@ -53,10 +53,9 @@ pub struct MicroBuffer {
     /// What this receiver sees within a few surfel radii, by rays (`near`).
     pub(super) near: Option<Near>,
     /// Per pixel, the part through which the environment shows, by rays
-    /// (`open`), if the receiver's field could tell (else empty): kept
-    /// from one receiver to the next, like the scratch.
+    /// (`open`), if the receiver's field could tell (else empty; the
+    /// memory is kept from one receiver to the next, like the scratch).
     pub(super) open: Vec<f32>,
-    pub(super) open_by_rays: bool,
     /// The normal irradiance is convolved about, in the local frame, where
     /// it is not the receiver's own (a normal map's).
     pub(super) shading: Option<Vec3>,
@@ -86,7 +85,6 @@ impl MicroBuffer {
             scratch: compose::Scratch::default(),
             near: None,
             open: Vec::new(),
-            open_by_rays: false,
             shading: None,
         })
     }
@@ -122,7 +120,7 @@ impl MicroBuffer {
         self.frame = [t, bt, n];
         self.frags.clear();
         self.near = None;
-        self.open_by_rays = false;
+        self.open.clear();
         self.shading = None;
     }
 
@@ -240,7 +238,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
-            open: self.open_by_rays.then_some(self.open.as_slice()),
+            open: (!self.open.is_empty()).then_some(self.open.as_slice()),
             shading: self.shading,
         };
         // The sky from the fields, not `sky()`: that would borrow the whole
@@ -263,7 +261,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
-            open: self.open_by_rays.then_some(self.open.as_slice()),
+            open: (!self.open.is_empty()).then_some(self.open.as_slice()),
             shading: self.shading,
         }
     }
@@ -312,7 +310,7 @@ impl MicroBuffer {
             position: self.position,
             frame: self.frame,
             near: self.near.as_ref(),
-            open: self.open_by_rays.then_some(self.open.as_slice()),
+            open: (!self.open.is_empty()).then_some(self.open.as_slice()),
             shading: self.shading,
         };
         compose::occlusion(&self.table, &self.frags, tree, &site, &mut self.scratch)
@@ -337,7 +335,7 @@ impl MicroBuffer {
             self.near = near::near(&self.table, nodes, tree, self.position, &self.frame, field);
         }
         if self.environment.is_some() {
-            self.open_by_rays = open::open(
+            open::open(
                 &self.table,
                 self.position,
                 &self.frame,

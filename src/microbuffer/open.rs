@@ -26,7 +26,7 @@ use super::table::Table;
 
 /// Per pixel of `t`, the fraction through which the environment shows from
 /// the receiver at `position` with local frame `frame` (world space), into
-/// `open`; `false` where `field` cannot tell. `frags`: the receiver's
+/// `open`; left empty where `field` cannot tell. `frags`: the receiver's
 /// fragments.
 #[inline(always)]
 pub(super) fn open(
@@ -36,48 +36,56 @@ pub(super) fn open(
     field: &dyn NearField,
     frags: &Fragments,
     open: &mut Vec<f32>,
-) -> bool {
+) {
     let normal = frame[2];
-    let world = |x: f32, y: f32, z: f32| (frame[0] * x + frame[1] * y + frame[2] * z).normalize();
     open.clear();
     for l in &t.dir {
-        match field.escapes(position, normal, world(l.x, l.y, l.z)) {
+        match field.escapes(position, normal, world(frame, l.x, l.y, l.z)) {
             Some(e) => open.push(if e { 1.0 } else { 0.0 }),
-            None => return false,
+            None => {
+                open.clear();
+                return;
+            }
         }
     }
-    let n = t.n;
-    let edge = |p: usize| {
-        let (c, r) = (p % n, p / n);
-        let v = open[p];
-        (c > 0 && open[p - 1] != v)
-            || (c + 1 < n && open[p + 1] != v)
-            || (r > 0 && open[p - n] != v)
-            || (r + 1 < n && open[p + n] != v)
-    };
     // Decided on the pixel-centre rays alone, then refined: a refined
     // pixel's fraction must not decide whether its neighbour is an edge.
-    let mut drawn = vec![false; open.len()];
+    let mut refine = vec![false; open.len()];
     for &p in &frags.pixel {
-        drawn[p as usize] = true;
+        refine[p as usize] = open[p as usize] == 1.0;
     }
-    let mut edges = Vec::new();
+    for (p, r) in refine.iter_mut().enumerate() {
+        *r |= edge(open, t.n, p);
+    }
     for p in 0..open.len() {
-        if edge(p) || (open[p] == 1.0 && drawn[p]) {
-            edges.push(p);
+        if !refine[p] {
+            continue;
         }
-    }
-    for p in edges {
         let [sx, sy, sz] = &t.sub[p];
         let mut escaped = 0u32;
         for k in 0..sx.len() {
-            if field.escapes(position, normal, world(sx[k], sy[k], sz[k])) == Some(true) {
+            if field.escapes(position, normal, world(frame, sx[k], sy[k], sz[k])) == Some(true) {
                 escaped += 1;
             }
         }
         open[p] = escaped as f32 / sx.len() as f32;
     }
-    true
+}
+
+/// The world direction of local `(x, y, z)` in `frame`, unit.
+#[inline(always)]
+fn world(frame: &[Vec3; 3], x: f32, y: f32, z: f32) -> Vec3 {
+    (frame[0] * x + frame[1] * y + frame[2] * z).normalize()
+}
+
+/// Whether pixel `p` of the `n × n` grid differs from a 4-neighbour in `open`.
+#[inline(always)]
+fn edge(open: &[f32], n: usize, p: usize) -> bool {
+    let (c, r, v) = (p % n, p / n, open[p]);
+    (c > 0 && open[p - 1] != v)
+        || (c + 1 < n && open[p + 1] != v)
+        || (r > 0 && open[p - n] != v)
+        || (r + 1 < n && open[p + n] != v)
 }
 
 /// `Σ f(p)·w(p)·(L(p) + sky(p)·open(p))` in pixel order, `L(p)` the
