@@ -243,7 +243,7 @@ impl MicroBuffer {
         };
         // The sky from the fields, not `sky()`: that would borrow the whole
         // buffer, whose working memory the composition writes.
-        let sky = compose::Sky::of(self.environment.as_deref(), self.frame);
+        let sky = open::Sky::of(self.environment.as_deref(), self.frame);
         compose::irradiance(
             &self.table,
             &self.frags,
@@ -268,8 +268,8 @@ impl MicroBuffer {
 
     /// What the open pixels see.
     #[inline(always)]
-    fn sky(&self) -> Option<compose::Sky<'_>> {
-        compose::Sky::of(self.environment.as_deref(), self.frame)
+    fn sky(&self) -> Option<open::Sky<'_>> {
+        open::Sky::of(self.environment.as_deref(), self.frame)
     }
 
     /// Glossy reflection towards `wo` (world, unit):

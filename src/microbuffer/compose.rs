@@ -38,10 +38,9 @@ use std::simd::prelude::*;
 
 use super::fragments::Fragments;
 use super::near::Near;
-use super::open;
+use super::open::{self, Sky};
 use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, hidden_by, lanes, wholly_behind};
 use super::table::Table;
-use crate::environment::Environment;
 use crate::simd::{F32s, M32s, Real, sum};
 use crate::tree::Tree;
 
@@ -450,7 +449,7 @@ pub(crate) fn irradiance(
     let (cover, radiance) = (&scratch.cover, &scratch.radiance);
     let mut e = Vec3::ZERO;
     if let (Some(open), Some(sky)) = (site.open, sky) {
-        let e = open::light_and_sky(radiance, weights, open, |p| sky.at(t, p), |_| Vec3::ONE);
+        let e = open::light_and_sky(radiance, weights, open, sky, t, open::one);
         brightest = brightest.max(sky.environment.max_radiance());
         return at_most(e, brightest * std::f32::consts::PI);
     }
@@ -502,33 +501,6 @@ fn at_most(v: Vec3, bound: Vec3) -> Vec3 {
     if v.is_finite() { v.min(bound) } else { v }
 }
 
-/// What a receiver's open pixels see: the environment, through the
-/// receiver's frame (local x, y, z in world space).
-pub(crate) struct Sky<'a> {
-    pub environment: &'a Environment,
-    pub frame: [Vec3; 3],
-}
-
-impl<'a> Sky<'a> {
-    /// What a receiver with local frame `frame` sees through its open
-    /// pixels: `environment`, or nothing (black).
-    #[inline(always)]
-    pub(crate) fn of(environment: Option<&'a Environment>, frame: [Vec3; 3]) -> Option<Self> {
-        Some(Sky {
-            environment: environment?,
-            frame,
-        })
-    }
-
-    /// The environment's radiance toward pixel `p`'s centre.
-    #[inline(always)]
-    fn at(&self, t: &Table, p: usize) -> Vec3 {
-        let l = t.dir[p];
-        let d = self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z;
-        self.environment.radiance(d)
-    }
-}
-
 /// Ambient occlusion `Σ coverage·∫cos dω / π`, at most 1.
 #[inline(always)]
 pub(crate) fn occlusion(
@@ -563,7 +535,7 @@ pub(crate) fn reflected(
     compose(t, frags, tree, site, true, c);
     let mut e = Vec3::ZERO;
     if let (Some(open), Some(sky)) = (site.open, sky) {
-        return open::light_and_sky(&c.radiance, &t.cos_weight, open, |p| sky.at(t, p), f);
+        return open::light_and_sky(&c.radiance, &t.cos_weight, open, sky, t, f);
     }
     for (p, (l, w)) in c.radiance.iter().zip(&t.cos_weight).enumerate() {
         if *l != Vec3::ZERO {

@@ -23,6 +23,7 @@ use glam::Vec3;
 use super::fragments::Fragments;
 use super::near::NearField;
 use super::table::Table;
+use crate::environment::Environment;
 
 /// Per pixel of `t`, the fraction through which the environment shows from
 /// the receiver at `position` with local frame `frame` (world space), into
@@ -96,7 +97,8 @@ pub(super) fn light_and_sky(
     radiance: &[Vec3],
     weights: &[f32],
     open: &[f32],
-    sky: impl Fn(usize) -> Vec3,
+    sky: &Sky,
+    t: &Table,
     f: impl Fn(usize) -> Vec3,
 ) -> Vec3 {
     let mut e = Vec3::ZERO;
@@ -105,8 +107,42 @@ pub(super) fn light_and_sky(
             e += *l * f(p) * *w;
         }
         if *o > 0.0 {
-            e += sky(p) * f(p) * (*o * *w);
+            e += sky.at(t, p) * f(p) * (*o * *w);
         }
     }
     e
+}
+
+/// One for every pixel: irradiance's weight in [`light_and_sky`] (a
+/// function, not a closure, so that it is inlined into the kernels' clones).
+#[inline(always)]
+pub(super) fn one(_: usize) -> Vec3 {
+    Vec3::ONE
+}
+
+/// What a receiver's open pixels see: the environment, through the
+/// receiver's frame (local x, y, z in world space).
+pub(crate) struct Sky<'a> {
+    pub environment: &'a Environment,
+    pub frame: [Vec3; 3],
+}
+
+impl<'a> Sky<'a> {
+    /// What a receiver with local frame `frame` sees through its open
+    /// pixels: `environment`, or nothing (black).
+    #[inline(always)]
+    pub(crate) fn of(environment: Option<&'a Environment>, frame: [Vec3; 3]) -> Option<Self> {
+        Some(Sky {
+            environment: environment?,
+            frame,
+        })
+    }
+
+    /// The environment's radiance toward pixel `p`'s centre.
+    #[inline(always)]
+    pub(super) fn at(&self, t: &Table, p: usize) -> Vec3 {
+        let l = t.dir[p];
+        let d = self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z;
+        self.environment.radiance(d)
+    }
 }
