@@ -28,7 +28,7 @@ use crate::error::Error;
 use crate::gather::{Gather, Gatherer};
 use crate::microbuffer::{Convolution, MicroBuffer};
 use crate::rng::{Rng, film_point, mix};
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene, SceneError};
 use crate::simd::LANES;
 use crate::tree::{Tree, TreeFile};
 
@@ -72,6 +72,9 @@ pub(crate) struct PacketPoint {
 /// whole; the benchmark and the error report run its stages one by one.
 pub struct Frame<'s> {
     pub(crate) scene: &'s Scene,
+    /// The view rendered: the scene's camera, or a pose of a camera path
+    /// ([`set_camera`](Self::set_camera)).
+    pub(crate) camera: Camera,
     pub(crate) opts: RenderOptions,
     pub(crate) tracer: Tracer,
     pub(crate) lights: Lights,
@@ -173,6 +176,7 @@ impl<'s> Frame<'s> {
         });
         Ok(Frame {
             scene,
+            camera: scene.camera,
             opts: *opts,
             tracer,
             lights,
@@ -185,6 +189,29 @@ impl<'s> Frame<'s> {
             needs_points,
             environment,
         })
+    }
+
+    /// Renders from `camera` from now on: a frame of a camera path, with the
+    /// surfels, their light and the tree of this bake. The film must be the
+    /// scene camera's (a crop and the tile grid are laid out on it).
+    pub fn set_camera(&mut self, camera: Camera) -> Result<(), RenderError> {
+        camera.validate()?;
+        let (w, h) = (self.scene.camera.width, self.scene.camera.height);
+        if (camera.width, camera.height) != (w, h) {
+            return Err(RenderError::Scene(SceneError::Invalid {
+                what: format!(
+                    "camera {}×{}: a frame of this bake renders the scene's {w}×{h} film",
+                    camera.width, camera.height
+                ),
+            }));
+        }
+        self.camera = camera;
+        Ok(())
+    }
+
+    /// The camera rendered.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// The tree of the surfels (empty when the render needs none).
@@ -254,7 +281,7 @@ impl<'s> Frame<'s> {
 
     /// The window rendered: the crop, or the whole frame.
     pub(crate) fn window(&self) -> Crop {
-        let c = &self.scene.camera;
+        let c = &self.camera;
         self.opts.crop.unwrap_or(Crop::full(c.width, c.height))
     }
 
@@ -295,7 +322,7 @@ impl<'s> Frame<'s> {
         s: u32,
         mut misses: Option<&mut Vec<(usize, Vec3)>>,
     ) -> Vec<PacketPoint> {
-        let cam = &self.scene.camera;
+        let cam = &self.camera;
         let light_first = s.wrapping_mul(self.light_samples());
         // Each of the pixel's stratified samples filters its own share of
         // the pixel: together they cover it without blurring past it.

@@ -252,7 +252,7 @@ impl Frame<'_> {
         if !self.needs_points {
             return Ok(None);
         }
-        let cam = &self.scene.camera;
+        let cam = &self.camera;
         let window = self.window();
         let s = spacing;
         // The cells the window's samples fall in (lattice coordinates are
@@ -327,7 +327,7 @@ impl Frame<'_> {
         gather: &Gather,
         timers: &Timers,
     ) -> Result<(), RenderError> {
-        let cam = &self.scene.camera;
+        let cam = &self.camera;
         let spread = cam.pixel_spread();
         let mut hits: Vec<((u32, u32), ShadingPoint)> = points
             .par_iter()

@@ -44,7 +44,7 @@ impl Frame<'_> {
         let opts = &self.opts;
         let window = self.window();
         let w = window.width();
-        let eye = self.scene.camera.origin;
+        let eye = self.camera.origin;
         // Made when a tile first has receivers for it (most tiles have no
         // glossy ones).
         let mut gatherers: [Option<Gatherer>; 2] = [None, None];
@@ -147,7 +147,7 @@ impl Frame<'_> {
         eye: Vec3,
     ) -> (Vec<(u32, PacketPoint)>, Vec<Sharing>) {
         let spp = self.opts.spp;
-        let width = self.scene.camera.width;
+        let width = self.camera.width;
         let samples: Vec<Unserved> = own
             .iter()
             .map(|(s, pp, group)| {

@@ -16,6 +16,7 @@ mod fetched;
 #[cfg(feature = "formats")]
 pub mod formats;
 pub mod nave;
+mod path;
 #[cfg(feature = "formats")]
 mod shapes;
 pub mod texture;
@@ -27,6 +28,7 @@ pub use catalogue::{available_scenes_in, resolve, resolve_in};
 pub use fetched::SPONZA_SCALE;
 #[cfg(feature = "formats")]
 pub use formats::{load, load_with};
+pub use path::{CameraPath, CameraPose};
 pub use texture::{AlphaMap, NormalMap, Relief, SurfacePoint, Texture, TextureMap};
 
 use std::fmt;
@@ -189,6 +191,36 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// Checks the film, the field of view and the pose; the error says which.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let c = self;
+        let bad = |what: String| Err(SceneError::Invalid { what });
+        if c.width == 0 || c.height == 0 || !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
+            return bad(format!(
+                "camera {}×{} fov {} is not usable",
+                c.width, c.height, c.fov_degrees
+            ));
+        }
+        if c.width > MAX_IMAGE_SIDE || c.height > MAX_IMAGE_SIDE {
+            return bad(format!(
+                "camera {}×{} is larger than {MAX_IMAGE_SIDE}×{MAX_IMAGE_SIDE}",
+                c.width, c.height
+            ));
+        }
+        if !(c.origin.is_finite() && c.target.is_finite() && c.up.is_finite()) {
+            return bad(format!(
+                "camera origin {} target {} up {} is not finite",
+                c.origin, c.target, c.up
+            ));
+        }
+        if (c.target - c.origin).length_squared() == 0.0
+            || (c.target - c.origin).cross(c.up).length_squared() == 0.0
+        {
+            return bad("camera looks along its up vector or at its own origin".into());
+        }
+        Ok(())
+    }
+
     /// Unit forward, right and up vectors (right-handed: image right is
     /// `forward × up`).
     pub fn frame(&self) -> (Vec3, Vec3, Vec3) {
@@ -468,31 +500,7 @@ impl Scene {
                 return bad(format!("light {i} ({l:?}) is not finite and ≥ 0"));
             }
         }
-        let c = &self.camera;
-        if c.width == 0 || c.height == 0 || !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
-            return bad(format!(
-                "camera {}×{} fov {} is not usable",
-                c.width, c.height, c.fov_degrees
-            ));
-        }
-        if c.width > MAX_IMAGE_SIDE || c.height > MAX_IMAGE_SIDE {
-            return bad(format!(
-                "camera {}×{} is larger than {MAX_IMAGE_SIDE}×{MAX_IMAGE_SIDE}",
-                c.width, c.height
-            ));
-        }
-        if !(c.origin.is_finite() && c.target.is_finite() && c.up.is_finite()) {
-            return bad(format!(
-                "camera origin {} target {} up {} is not finite",
-                c.origin, c.target, c.up
-            ));
-        }
-        if (c.target - c.origin).length_squared() == 0.0
-            || (c.target - c.origin).cross(c.up).length_squared() == 0.0
-        {
-            return bad("camera looks along its up vector or at its own origin".into());
-        }
-        Ok(())
+        self.camera.validate()
     }
 }
 

@@ -343,6 +343,13 @@ pub struct RenderArgs {
     /// Surfels and tree from this file (`pbgi bake`) instead of building them.
     #[arg(long, value_name = "FILE")]
     pub tree: Option<PathBuf>,
+    /// Render every frame of a camera path from one bake (the surfels, their
+    /// light and the tree built once, or read with --tree): a JSON file
+    /// `{"frames": [{"origin": [x,y,z], "target": [x,y,z], "up": [x,y,z],
+    /// "fov": degrees}, …]}` (up and fov optional). `{}` in -o becomes the
+    /// frame number, 4 digits from 0000.
+    #[arg(long, value_name = "PATH.json")]
+    pub camera_path: Option<PathBuf>,
     /// Render only pixels x0..x1, y0..y1 of the frame (an image of that size).
     #[arg(long, value_name = "X0,Y0,X1,Y1")]
     pub crop: Option<Crop>,

@@ -6,6 +6,7 @@
 mod args;
 mod bake;
 mod overrides;
+mod path;
 mod progress;
 mod report;
 mod scale;
@@ -124,11 +125,16 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         won.spp.unwrap_or(opts.spp),
         won.bounces.map_or(opts.bounces, |b| b as u32),
     );
-    let out_path = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
-    check_output(&out_path)?;
+    let out_path = match &a.camera_path {
+        Some(_) => path::pattern(a.output.as_deref(), &scene.name)?,
+        None => a
+            .output
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name))),
+    };
+    if a.camera_path.is_none() {
+        check_output(&out_path)?;
+    }
     let pool = thread_pool(a.threads)?;
     let loaded = match &a.tree {
         Some(path) => Some(bake::load_tree(path)?),
@@ -150,6 +156,9 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     });
     stages.finish();
     let frame = frame.map_err(|e| e as Box<dyn std::error::Error>)?;
+    if let Some(file) = &a.camera_path {
+        return path::render_path(&scene, &opts, frame, file, &out_path, &pool);
+    }
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
     let out = pool.install(|| frame.render(&|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
@@ -301,7 +310,7 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
     Ok(())
 }
 
-fn check_output(path: &Path) -> Res<()> {
+pub(crate) fn check_output(path: &Path) -> Res<()> {
     match path
         .extension()
         .and_then(|e| e.to_str())
@@ -313,7 +322,7 @@ fn check_output(path: &Path) -> Res<()> {
     }
 }
 
-fn write_image(img: &Image, path: &Path) -> Res<()> {
+pub(crate) fn write_image(img: &Image, path: &Path) -> Res<()> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -347,7 +356,7 @@ fn write_image(img: &Image, path: &Path) -> Res<()> {
     Ok(())
 }
 
-fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
+pub(crate) fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
     let c = &scene.camera;
     println!(
         "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",

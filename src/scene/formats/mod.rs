@@ -12,6 +12,7 @@ mod mitsuba;
 mod mtl;
 mod obj;
 mod off;
+mod path;
 mod ply;
 
 use std::collections::HashMap;
@@ -25,6 +26,7 @@ use common::single_file;
 use mitsuba::mitsuba;
 pub use obj::{MISSING_MTL_GREY, ObjFile, read_obj};
 pub use off::read_off;
+pub use path::read_camera_path;
 pub use ply::read_ply;
 
 use super::{Material, Scene, SceneError};
