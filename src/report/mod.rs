@@ -19,6 +19,7 @@ mod csv;
 mod equal_error;
 mod error;
 mod eta;
+mod flicker;
 mod markdown;
 #[cfg(feature = "plots")]
 pub mod plot;
@@ -34,6 +35,7 @@ pub use equal_error::{
     EqualError, Reach, Series, equal_error, fitted_floor, series, time_above_floor, time_for,
 };
 pub use error::ReportError;
+pub use flicker::{Flicker, flicker};
 pub use markdown::{equal_error_markdown, to_markdown};
 pub use scale::{ScaleRow, copies, scale_csv, scale_markdown, scale_row};
 pub use sweep::{

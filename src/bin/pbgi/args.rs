@@ -136,6 +136,17 @@ pub struct ReportArgs {
     /// image paths relative to the CSV's folder. May be given several times.
     #[arg(long)]
     pub denoised: Vec<PathBuf>,
+    /// Measure a shot instead of one image: each frame's error and the
+    /// flicker (each frame-to-frame change against the true change) of
+    /// point-based GI (--spp, default 4,16,64) and the path tracer
+    /// (--path-tracer-spp, default 16,256); --denoised lists frames as
+    /// patterns with {}. Writes OUT/flicker.md and flicker.csv.
+    #[arg(long, value_name = "PATH.json")]
+    pub camera_path: Option<PathBuf>,
+    /// The references of a --camera-path's frames, reference-0000.exr …,
+    /// path traced there at --reference-spp where missing (default OUT/references).
+    #[arg(long, value_name = "DIR", requires = "camera_path")]
+    pub reference_dir: Option<PathBuf>,
     #[command(flatten)]
     pub settings: Settings,
 }

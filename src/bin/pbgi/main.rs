@@ -5,6 +5,7 @@
 
 mod args;
 mod bake;
+mod flicker;
 mod overrides;
 mod path;
 mod progress;
@@ -82,7 +83,7 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
 }
 
 /// A built-in scene or a file, its warnings printed.
-fn load_scene(name: &str) -> Res<pbgi::scene::Scene> {
+pub(crate) fn load_scene(name: &str) -> Res<pbgi::scene::Scene> {
     let scene = resolve(name)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -531,7 +532,7 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
     }
 }
 
-fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
+pub(crate) fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
     use exr::prelude::*;
     let img = read_first_rgba_layer_from_file(
         path,

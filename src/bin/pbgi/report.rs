@@ -146,6 +146,9 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     if a.replot {
         return replot(a);
     }
+    if let Some(path) = &a.camera_path {
+        return crate::flicker::cmd_flicker(a, path);
+    }
     let targets = targets(a)?;
     let scene = load_scene(&a.scene)?;
     let sweep = sweep_options(a, scene.has_emitters())?;
