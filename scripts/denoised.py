@@ -59,6 +59,14 @@ def write(path, rgb):
     mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32)).write(path)
 
 
+def write_csv(path, rows):
+    """The list `pbgi report --denoised` reads: `label,spp,seconds,image`."""
+    with open(path, "w") as f:
+        f.write("label,spp,seconds,image\n")
+        for label, spp, s, name in rows:
+            f.write(f'"{label}",{spp},{s:.6f},{name}\n')
+
+
 def read(path):
     b = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, srgb_gamma=False)
     return np.array(b)
@@ -138,10 +146,7 @@ def main():
                 rows.append(("pbgi path tracer + OIDN", spp, s, name))
                 print(f"pbgi path tracer + OIDN, {spp} spp: {s:.3f} s", flush=True)
     csv = os.path.join(a.out, "denoised.csv")
-    with open(csv, "w") as f:
-        f.write("label,spp,seconds,image\n")
-        for label, spp, s, name in rows:
-            f.write(f'"{label}",{spp},{s:.6f},{name}\n')
+    write_csv(csv, rows)
     print(f"load average {os.getloadavg()[0]:.2f}; wrote {csv}")
 
 

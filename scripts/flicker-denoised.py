@@ -22,7 +22,7 @@ import os
 import sys
 import time
 
-from denoised import denoise, load, write, mi, dr  # noqa: E402  (the variant is set there)
+from denoised import denoise, load, write, write_csv, mi, dr  # noqa: E402  (the variant is set there)
 
 
 def main():
@@ -66,10 +66,7 @@ def main():
             rows.append((label, spp, s, f"mitsuba-{policy}-{spp}-{{}}.exr"))
             print(f"{label}, {spp} spp: {s:.3f} s per frame", flush=True)
     csv = os.path.join(a.out, "frames.csv")
-    with open(csv, "w") as f:
-        f.write("label,spp,seconds,image\n")
-        for label, spp, s, name in rows:
-            f.write(f'"{label}",{spp},{s:.6f},{name}\n')
+    write_csv(csv, rows)
     print(f"wrote {csv}")
 
 
