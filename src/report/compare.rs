@@ -225,11 +225,12 @@ pub fn side_by_side(image: &Image, reference: &Image, mask: &[bool]) -> (Vec<u8>
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use glam::Vec3;
 
-    fn image(pixels: Vec<Vec3>) -> Image {
+    /// An image one pixel high (the tests of this module and of the flicker).
+    pub(in crate::report) fn image(pixels: Vec<Vec3>) -> Image {
         Image {
             width: pixels.len() as u32,
             height: 1,

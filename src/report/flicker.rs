@@ -89,16 +89,9 @@ pub fn flicker(frames: &[Image], references: &[Image], masks: &[Vec<bool>]) -> R
 mod tests {
     use glam::Vec3;
 
+    use super::super::compare::tests::image;
     use super::*;
     use crate::rng::Rng;
-
-    fn image(pixels: Vec<Vec3>) -> Image {
-        Image {
-            width: pixels.len() as u32,
-            height: 1,
-            pixels,
-        }
-    }
 
     /// Four references of a moving gradient, and noise fields.
     fn shot() -> (Vec<Image>, Vec<Vec<bool>>) {
