@@ -62,9 +62,15 @@ fn a_path_renders_each_frame_from_one_bake_as_a_single_render_would() {
     let (stdout, stderr) = render_path(&frames, &["--threads", "2"], &[]);
     // Off a terminal each stage of the bake prints one line when done: the
     // surfels and their light were made once for the three frames.
-    let surfel_stages = stderr.lines().filter(|l| l.contains("surfels") && l.contains("done in")).count();
+    let surfel_stages = stderr
+        .lines()
+        .filter(|l| l.contains("surfels") && l.contains("done in"))
+        .count();
     assert_eq!(surfel_stages, 1, "{stderr}");
-    assert!(stdout.contains("camera path: 3 frame(s) from one bake"), "{stdout}");
+    assert!(
+        stdout.contains("camera path: 3 frame(s) from one bake"),
+        "{stdout}"
+    );
     assert!(stdout.contains("frames after the first"), "{stdout}");
     let digests = frame_digests(&stdout);
     assert_eq!(digests.len(), 3, "{stdout}");
@@ -94,7 +100,10 @@ fn a_path_renders_each_frame_from_one_bake_as_a_single_render_would() {
         &[],
     );
     assert!(ok, "{stdout_single}{stderr_single}");
-    assert!(stdout_single.contains(&format!("image digest {})", digests[2])), "{stdout_single}\n{stdout}");
+    assert!(
+        stdout_single.contains(&format!("image digest {})", digests[2])),
+        "{stdout_single}\n{stdout}"
+    );
 
     // One thread, and the portable path: the same bits.
     let (one, _) = render_path(&dir.join("t-{}.exr"), &["--threads", "1"], &[]);
@@ -131,12 +140,21 @@ fn bad_paths_and_patterns_are_errors_naming_them() {
     assert!(e.contains("put {} where the frame number goes"), "{e}");
     let e = case("{\"frames\": [\n{\"origin\": [0, 0, 3.9],\n}]}", "f-{}.exr");
     assert!(e.contains("path.json:3"), "a syntax error names its line: {e}");
-    let e = case(r#"{"frames": [{"origin": [0, 0, 3.9], "target": [0, 0, 2.9]}, {"origin": [0, 0, 1]}]}"#, "f-{}.exr");
+    let e = case(
+        r#"{"frames": [{"origin": [0, 0, 3.9], "target": [0, 0, 2.9]}, {"origin": [0, 0, 1]}]}"#,
+        "f-{}.exr",
+    );
     assert!(e.contains("frame 1 has no \"target\""), "{e}");
-    let e = case(r#"{"frames": [{"origin": [0, 0, 1], "target": [0, 0, 1]}]}"#, "f-{}.exr");
+    let e = case(
+        r#"{"frames": [{"origin": [0, 0, 1], "target": [0, 0, 1]}]}"#,
+        "f-{}.exr",
+    );
     assert!(e.contains("frame 0") && e.contains("its own origin"), "{e}");
     let e = case(r#"{"frames": []}"#, "f-{}.exr");
     assert!(e.contains("no frames"), "{e}");
-    let e = case(r#"{"frames": [{"origin": [0, 0, "x"], "target": [0, 0, 2.9]}]}"#, "f-{}.exr");
+    let e = case(
+        r#"{"frames": [{"origin": [0, 0, "x"], "target": [0, 0, 2.9]}]}"#,
+        "f-{}.exr",
+    );
     assert!(e.contains("frame 0: \"origin\""), "{e}");
 }

@@ -96,7 +96,13 @@ mod tests {
     /// Four references of a moving gradient, and noise fields.
     fn shot() -> (Vec<Image>, Vec<Vec<bool>>) {
         let refs = (0..4)
-            .map(|k| image((0..256).map(|i| Vec3::splat(1.0 + ((i + 7 * k) % 50) as f32 / 25.0)).collect()))
+            .map(|k| {
+                image(
+                    (0..256)
+                        .map(|i| Vec3::splat(1.0 + ((i + 7 * k) % 50) as f32 / 25.0))
+                        .collect(),
+                )
+            })
             .collect();
         (refs, vec![vec![false; 256]; 4])
     }
@@ -120,7 +126,15 @@ mod tests {
         let moving: Vec<Image> = refs
             .iter()
             .enumerate()
-            .map(|(k, r)| image(r.pixels.iter().zip(&noise(10 + k as u64)).map(|(a, n)| *a + *n).collect()))
+            .map(|(k, r)| {
+                image(
+                    r.pixels
+                        .iter()
+                        .zip(&noise(10 + k as u64))
+                        .map(|(a, n)| *a + *n)
+                        .collect(),
+                )
+            })
             .collect();
         let m = flicker(&moving, &refs, &masks).unwrap();
         // New noise each frame: the change carries two frames' noise.

@@ -39,14 +39,21 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
     };
     let n = cameras.len();
     let masks: Vec<Vec<bool>> = (0..n).map(|k| emitter_mask(&framed(k))).collect();
-    let dir = a.reference_dir.clone().unwrap_or_else(|| a.out.join("references"));
+    let dir = a
+        .reference_dir
+        .clone()
+        .unwrap_or_else(|| a.out.join("references"));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     // The references: the path tracer at --reference-spp, a new seed per frame.
     let mut references = Vec::with_capacity(n);
     for k in 0..n {
         let file = frame_file(&dir.join("reference-{}.exr"), k);
         if !file.exists() {
-            eprintln!("path tracing the reference of frame {k} ({} spp) to {}", a.reference_spp, file.display());
+            eprintln!(
+                "path tracing the reference of frame {k} ({} spp) to {}",
+                a.reference_spp,
+                file.display()
+            );
             let o = ReferenceOptions {
                 spp: a.reference_spp,
                 bounces: opts.bounces as i32,
@@ -59,7 +66,8 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
         references.push(read_exr(&file)?);
     }
     let measure = |label: String, spp: u32, frames: Vec<Image>, seconds: f64| -> Res<Row> {
-        let flicker = flicker(&frames, &references, &masks).map_err(|e| format!("{label}, {spp} spp: {e}"))?;
+        let flicker =
+            flicker(&frames, &references, &masks).map_err(|e| format!("{label}, {spp} spp: {e}"))?;
         Ok(Row {
             label,
             spp,
@@ -91,7 +99,10 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
                 seed: 1 + k as u64,
                 ..ReferenceOptions::default()
             };
-            frames.push(pool.install(|| render_reference(&framed(k), &o, &|_, _| {}))?.image);
+            frames.push(
+                pool.install(|| render_reference(&framed(k), &o, &|_, _| {}))?
+                    .image,
+            );
         }
         let seconds = clock.elapsed().as_secs_f64() / n as f64;
         eprintln!("path tracer, {spp} spp: {seconds:.2} s per frame");
@@ -104,7 +115,12 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
         let base = csv.parent().unwrap_or(Path::new("."));
         for e in external_points(&text).map_err(|e| format!("{}: {e}", csv.display()))? {
             if !e.image.contains("{}") {
-                return Err(format!("{}: {}: a frame pattern needs {{}} for the frame number", csv.display(), e.image).into());
+                return Err(format!(
+                    "{}: {}: a frame pattern needs {{}} for the frame number",
+                    csv.display(),
+                    e.image
+                )
+                .into());
             }
             let frames = (0..n)
                 .map(|k| read_exr(&frame_file(&base.join(&e.image), k)))

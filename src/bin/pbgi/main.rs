@@ -357,7 +357,12 @@ pub(crate) fn write_image(img: &Image, path: &Path) -> Res<()> {
     Ok(())
 }
 
-pub(crate) fn print_summary(scene: &pbgi::scene::Scene, opts: &RenderOptions, out: &RenderOutput, threads: usize) {
+pub(crate) fn print_summary(
+    scene: &pbgi::scene::Scene,
+    opts: &RenderOptions,
+    out: &RenderOutput,
+    threads: usize,
+) {
     let c = &scene.camera;
     println!(
         "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",

@@ -58,7 +58,11 @@ pub fn render_path(
         let path = frame_file(pattern, k);
         write_image(&out.image, &path)?;
         seconds.push(clock.elapsed().as_secs_f64());
-        written.push(format!("frame {k:04}: wrote {} (image digest {:016x})", path.display(), out.image.digest()));
+        written.push(format!(
+            "frame {k:04}: wrote {} (image digest {:016x})",
+            path.display(),
+            out.image.digest()
+        ));
         first.get_or_insert(out);
         tick(&bar, k + 1, n);
     }

@@ -36,8 +36,13 @@ pub fn read_camera_path(path: &Path, camera: &Camera) -> Result<CameraPath, Scen
             .filter(|a| a.len() == 3)
             .map(|a| a.iter().filter_map(|x| x.as_f64().map(|x| x as f32)).collect());
         match xyz {
-            Some(xyz) if xyz.len() == 3 && xyz.iter().all(|x| x.is_finite()) => Ok(Some(Vec3::from_slice(&xyz))),
-            _ => Err(parse(0, format!("frame {k}: \"{key}\" is {v}, expected [x, y, z] of finite numbers"))),
+            Some(xyz) if xyz.len() == 3 && xyz.iter().all(|x| x.is_finite()) => {
+                Ok(Some(Vec3::from_slice(&xyz)))
+            }
+            _ => Err(parse(
+                0,
+                format!("frame {k}: \"{key}\" is {v}, expected [x, y, z] of finite numbers"),
+            )),
         }
     };
     let frames = frames
@@ -56,7 +61,12 @@ pub fn read_camera_path(path: &Path, camera: &Camera) -> Result<CameraPath, Scen
                     v.as_f64()
                         .map(|f| f as f32)
                         .filter(|f| *f > 0.0 && *f < 180.0)
-                        .ok_or_else(|| parse(0, format!("frame {k}: \"fov\" is {v}, expected degrees in (0, 180)")))?,
+                        .ok_or_else(|| {
+                            parse(
+                                0,
+                                format!("frame {k}: \"fov\" is {v}, expected degrees in (0, 180)"),
+                            )
+                        })?,
                 ),
             };
             Ok(CameraPose {
