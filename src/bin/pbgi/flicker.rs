@@ -9,7 +9,6 @@ use std::time::Instant;
 use pbgi::render::{Frame, Image, ReferenceOptions, render_reference};
 use pbgi::report::{Flicker, emitter_mask, external_points, flicker};
 use pbgi::scene::Scene;
-use pbgi::scene::formats::read_camera_path;
 
 use crate::args::{ReportArgs, Res};
 use crate::path::frame_file;
@@ -30,7 +29,7 @@ struct Row {
 
 pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
     let scene = load_scene(&a.scene)?;
-    let cameras = read_camera_path(path_file, &scene.camera)?.cameras(&scene.camera)?;
+    let cameras = crate::path::cameras(path_file, &scene)?;
     let pool = thread_pool(a.threads)?;
     let opts = a.settings.for_scene(&a.scene, a.settings.options(1)?);
     let framed = |k: usize| Scene {

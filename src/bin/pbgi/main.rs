@@ -128,14 +128,15 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     );
     let out_path = match &a.camera_path {
         Some(_) => path::pattern(a.output.as_deref(), &scene.name)?,
-        None => a
-            .output
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name))),
+        None => {
+            let out = a
+                .output
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
+            check_output(&out)?;
+            out
+        }
     };
-    if a.camera_path.is_none() {
-        check_output(&out_path)?;
-    }
     let pool = thread_pool(a.threads)?;
     let loaded = match &a.tree {
         Some(path) => Some(bake::load_tree(path)?),

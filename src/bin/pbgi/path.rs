@@ -16,6 +16,15 @@ pub fn frame_file(pattern: &Path, k: usize) -> PathBuf {
     PathBuf::from(pattern.to_string_lossy().replace("{}", &format!("{k:04}")))
 }
 
+/// The checked cameras of the path in `file` for `scene`'s camera; an
+/// error names the file.
+pub fn cameras(file: &Path, scene: &Scene) -> Res<Vec<pbgi::scene::Camera>> {
+    let path = read_camera_path(file, &scene.camera)?;
+    Ok(path
+        .cameras(&scene.camera)
+        .map_err(|e| format!("{}: {e}", file.display()))?)
+}
+
 /// The output pattern of a camera path: `-o`'s, which must hold `{}`, or
 /// `SCENE-{}.png`.
 pub fn pattern(output: Option<&Path>, scene: &str) -> Res<PathBuf> {
@@ -41,7 +50,7 @@ pub fn render_path(
     pattern: &Path,
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
-    let cameras = read_camera_path(file, &scene.camera)?.cameras(&scene.camera)?;
+    let cameras = cameras(file, scene)?;
     for k in 0..cameras.len() {
         check_output(&frame_file(pattern, k))?;
     }

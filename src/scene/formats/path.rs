@@ -9,9 +9,9 @@ use serde_json::Value;
 
 use crate::scene::{Camera, CameraPath, CameraPose, SceneError};
 
-/// Reads a camera path; a pose's missing `up` or `fov` is `camera`'s. The
-/// error names the file, the line of a JSON syntax error, or the frame and
-/// the field.
+/// Reads a camera path; a pose's missing `up` or `fov` is `camera`'s (its
+/// cameras are checked by [`CameraPath::cameras`]). The error names the
+/// file, the line of a JSON syntax error, or the frame and the field.
 pub fn read_camera_path(path: &Path, camera: &Camera) -> Result<CameraPath, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
@@ -77,7 +77,5 @@ pub fn read_camera_path(path: &Path, camera: &Camera) -> Result<CameraPath, Scen
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let path_ = CameraPath { frames };
-    path_.cameras(camera).map_err(|e| parse(0, e.to_string()))?;
-    Ok(path_)
+    Ok(CameraPath { frames })
 }
