@@ -44,7 +44,10 @@ fn sky_through_a_window_by_rays_converges_at_every_receiver_whatever_the_cut() {
     // near the window 45–79 % off at N 48 (all receivers, Ω 0.15 to 0.01:
     // disks overhanging the opening's edge, seen from beside it); by rays
     // the error is the pixels' alone, the same at every Ω, and falls with
-    // N: 34.8 / 11.6 / 2.9 % at N 14 / 24 / 48 (mid-wall 3.9 / 2.0 / 0.5 %).
+    // N: 14.6 / 3.0 / 0.9 % at N 14 / 24 / 48 (mid-wall 2.6 / 1.5 / 0.5 %).
+    // Beside the window's wall the window is a band of directions a few
+    // degrees wide, which the pixels' centres can all miss: refining only
+    // where a neighbour's ray differs gave 34.8 / 11.6 / 2.9 %.
     let scene = opening("window").dark_inside();
     let probes = scene.probes(2e-5);
     let by_n: Vec<Stats> = [14, 24, 48]
@@ -56,7 +59,11 @@ fn sky_through_a_window_by_rays_converges_at_every_receiver_whatever_the_cut() {
         assert!(w[0].rel_rmse > w[1].rel_rmse, "{by_n:?}");
     }
     assert!(
-        by_n[2].rel_rmse <= 0.04 && by_n[2].bias.abs() <= 0.015,
+        by_n[1].rel_rmse <= 0.04 && by_n[1].bias.abs() <= 0.015,
+        "{by_n:?}"
+    );
+    assert!(
+        by_n[2].rel_rmse <= 0.015 && by_n[2].bias.abs() <= 0.005,
         "{by_n:?}"
     );
     // The black walls' splats do not matter: another Ω, the same bits.

@@ -5,6 +5,7 @@ use glam::{DVec3, Vec3};
 
 use super::{ExactScene, Part, Probe, WINDOW};
 use crate::brdf::GlossyLobe;
+use crate::microbuffer::Sight;
 use crate::polygon::{clip, projected_solid_angle};
 use crate::rng::Rng;
 use crate::{Error, PointCloud, Surfel, Tree};
@@ -218,6 +219,16 @@ impl ExactScene {
     /// shows there).
     pub fn escapes(&self, p: Vec3, d: Vec3) -> bool {
         self.hit(p.as_dvec3(), d.as_dvec3().normalize()).is_none()
+    }
+
+    /// What the ray from `p` along unit `d` meets first: the sky, or a face
+    /// and the cosine there.
+    pub fn sight(&self, p: Vec3, d: Vec3) -> Sight {
+        let d = d.as_dvec3().normalize();
+        self.hit(p.as_dvec3(), d)
+            .map_or(Sight::Sky, |(k, _, _)| Sight::Surface {
+                cos: self.faces[k].normal().dot(d).abs() as f32,
+            })
     }
 
     /// Radiance seen from `p` along unit `d`; the sky's where the ray leaves.

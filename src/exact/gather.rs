@@ -10,7 +10,7 @@ use super::Probe;
 use crate::brdf::GlossyLobe;
 use crate::environment::Environment;
 use crate::microbuffer::{
-    Convolution, MicroBuffer, MicroBufferSink, NearField, PacketCut, shade_packet_near,
+    Convolution, MicroBuffer, MicroBufferSink, NearField, PacketCut, Sight, shade_packet_near,
 };
 use crate::{CutOptions, Error, LANES, Receiver, Scheme, Traversal, Tree};
 
@@ -157,5 +157,11 @@ impl NearField for super::ExactScene {
 
     fn escapes(&self, origin: Vec3, _normal: Vec3, dir: Vec3) -> Option<bool> {
         Some(self.escapes(origin, dir))
+    }
+
+    fn sight_each(&self, origin: Vec3, _normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+        out.clear();
+        out.extend(dirs.iter().map(|&d| self.sight(origin, d)));
+        true
     }
 }

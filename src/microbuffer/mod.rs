@@ -48,7 +48,7 @@ mod table;
 mod tiles;
 
 pub use buffer::{MicroBuffer, MicroBufferSink};
-pub use near::{NEAR_RADII, Near, NearField};
+pub use near::{NEAR_RADII, Near, NearField, Sight};
 pub use shade::{Convolution, PacketCut, shade_cuts, shade_packet};
 pub(crate) use shade::{shade_cuts_near, shade_packet_near};
 

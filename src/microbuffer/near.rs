@@ -77,6 +77,56 @@ pub trait NearField: Sync {
         let _ = (origin, normal, dir);
         None
     }
+
+    /// [`escapes`](Self::escapes) for each unit direction of `dirs` from
+    /// one receiver, in order, into `out` (cleared first); `false` where the
+    /// field cannot tell. One call for a receiver's rays lets a field reuse
+    /// what one ray met for the next (the renderer first tries the triangle
+    /// that stopped the previous ray); the answers must not depend on it.
+    fn escapes_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) -> bool {
+        out.clear();
+        for &d in dirs {
+            match self.escapes(origin, normal, d) {
+                Some(e) => out.push(e),
+                None => return false,
+            }
+        }
+        true
+    }
+
+    /// What each ray along `dirs` from one receiver meets first, into `out`
+    /// (cleared first); `false` where the field cannot tell. The default
+    /// asks [`escapes_each`](Self::escapes_each) and reports every surface
+    /// face-on (`cos` 1), so that no pixel refines for meeting one edge-on.
+    fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+        let mut escaped = Vec::with_capacity(dirs.len());
+        if !self.escapes_each(origin, normal, dirs, &mut escaped) {
+            return false;
+        }
+        out.clear();
+        out.extend(escaped.iter().map(|&e| {
+            if e {
+                Sight::Sky
+            } else {
+                Sight::Surface { cos: 1.0 }
+            }
+        }));
+        true
+    }
+}
+
+/// What a ray from a receiver meets first ([`NearField::sight_each`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sight {
+    /// Nothing at any distance: the environment shows.
+    Sky,
+    /// A surface, met at `cos = |its normal · the ray|` (0: edge-on). A
+    /// pixel's footprint there stretches as `1 / cos`, so an opening in it
+    /// that the pixel's centre ray misses may lie beside the hit.
+    Surface {
+        /// `|normal · dir|` at the hit.
+        cos: f32,
+    },
 }
 
 /// One receiver's near field: the nodes its composition leaves out, and per

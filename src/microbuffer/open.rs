@@ -9,21 +9,42 @@
 //! defaults and −7 % at fine settings, an atrium's sky −46 %
 //! (docs/lab/openings-exact.md). Whether a direction escapes is a question
 //! about the scene's surfaces, not the surfels', so where a
-//! [`NearField`] answers it, each pixel casts one ray through its centre,
-//! and a pixel whose ray differs from a neighbour's (an opening's edge
-//! crosses it), or whose ray escapes where a splat left a fragment (a jamb
-//! seen edge-on, narrower than the pixel, or disks overhanging an edge),
-//! casts one through each of its 16 sub-samples: the pixel's open part is
-//! the fraction that escapes. A pixel open all through shows
-//! the sky alone (the splats there are an opening's overhanging disks); one
-//! open in part adds the sky through that part to its splats' light.
+//! [`NearField`] answers it, each pixel casts one ray through its centre.
+//! A pixel refines, casting one ray through each of its 16 sub-samples,
+//! where its ray differs from one of its 8 neighbours' (an opening's edge
+//! or corner crosses it), where its ray escapes past a splat's fragment (a
+//! jamb seen edge-on, narrower than the pixel, or disks overhanging an
+//! edge), and where its ray or a neighbour's meets a surface edge-on (an
+//! opening in that surface may lie between the pixels' centres: from a
+//! receiver 8 cm from a window's wall, the window is a band of directions
+//! 4° wide, which no centre of a 10° pixel met). The pixel's open part is
+//! the fraction that escapes. A pixel open all through shows the sky alone
+//! (the splats there are an opening's overhanging disks); one open in part
+//! adds the sky through that part to its splats' light.
+//!
+//! A receiver's rays go to the field in two batches, the centres and then
+//! the sub-samples ([`NearField::sight_each`], [`NearField::escapes_each`]),
+//! so that the renderer's tracer can try the triangles that stopped the
+//! last rays before its tree.
 
 use glam::Vec3;
 
 use super::fragments::Fragments;
-use super::near::NearField;
-use super::table::Table;
+use super::near::{NearField, Sight};
+use super::table::{Table, unmap};
 use crate::environment::Environment;
+use crate::simd::LANES;
+
+/// A pixel whose centre ray meets a surface within this cosine of edge-on
+/// refines: its footprint there is over four times as long as face-on,
+/// long enough to hold an opening that every pixel centre misses (a window
+/// in the wall beside a receiver is a thin band of directions along that
+/// wall).
+const GRAZING: f32 = 0.25;
+
+/// A pixel whose centre ray meets a surface within a quarter of
+/// [`GRAZING`] refines on a `DEEP × DEEP` grid, not on its 16 sub-samples.
+const DEEP: usize = 8;
 
 /// Per pixel of `t`, the fraction through which the environment shows from
 /// the receiver at `position` with local frame `frame` (world space), into
@@ -40,36 +61,70 @@ pub(super) fn open(
 ) {
     let normal = frame[2];
     open.clear();
-    for l in &t.dir {
-        match field.escapes(position, normal, world(frame, l.x, l.y, l.z)) {
-            Some(e) => open.push(if e { 1.0 } else { 0.0 }),
-            None => {
-                open.clear();
-                return;
-            }
-        }
+    let mut dirs: Vec<Vec3> = t.dir.iter().map(|l| world(frame, l.x, l.y, l.z)).collect();
+    let mut sight = Vec::with_capacity(dirs.len());
+    if !field.sight_each(position, normal, &dirs, &mut sight) {
+        return;
     }
+    open.extend(sight.iter().map(|&s| if s == Sight::Sky { 1.0f32 } else { 0.0 }));
     // Decided on the pixel-centre rays alone, then refined: a refined
     // pixel's fraction must not decide whether its neighbour is an edge.
-    let mut refine = vec![false; open.len()];
+    // Pixels whose centre ray meets a surface edge-on, and their
+    // neighbours (an opening seen edge-on may lie in a pixel whose own
+    // centre ray passes beside the surface); the most edge-on more finely.
+    let grazing: Vec<f32> = sight
+        .iter()
+        .map(|s| {
+            if matches!(s, Sight::Surface { cos } if *cos < GRAZING) {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let deep: Vec<bool> = sight
+        .iter()
+        .map(|s| matches!(s, Sight::Surface { cos } if *cos < GRAZING / 4.0))
+        .collect();
+    let mut refine: Vec<bool> = (0..open.len())
+        .map(|p| grazing[p] == 1.0 || edge(&grazing, t.n, p))
+        .collect();
     for &p in &frags.pixel {
-        refine[p as usize] = open[p as usize] == 1.0;
+        refine[p as usize] |= open[p as usize] == 1.0;
     }
     for (p, r) in refine.iter_mut().enumerate() {
         *r |= edge(open, t.n, p);
     }
-    for p in 0..open.len() {
-        if !refine[p] {
+    // Every refined pixel's sub-samples, in pixel order, as one batch.
+    let refined: Vec<usize> = (0..open.len()).filter(|&p| refine[p]).collect();
+    dirs.clear();
+    let h = 2.0 / t.n as f64;
+    for &p in &refined {
+        if deep[p] {
+            let (u0, v0) = (-1.0 + (p % t.n) as f64 * h, -1.0 + (p / t.n) as f64 * h);
+            for j in 0..DEEP {
+                for i in 0..DEEP {
+                    let (u, v) = ((i as f64 + 0.5) / DEEP as f64, (j as f64 + 0.5) / DEEP as f64);
+                    let l = unmap(u0 + u * h, v0 + v * h);
+                    dirs.push(world(frame, l.x as f32, l.y as f32, l.z as f32));
+                }
+            }
             continue;
         }
         let [sx, sy, sz] = &t.sub[p];
-        let mut escaped = 0u32;
-        for k in 0..sx.len() {
-            if field.escapes(position, normal, world(frame, sx[k], sy[k], sz[k])) == Some(true) {
-                escaped += 1;
-            }
-        }
-        open[p] = escaped as f32 / sx.len() as f32;
+        dirs.extend((0..LANES).map(|k| world(frame, sx[k], sy[k], sz[k])));
+    }
+    let mut escaped = Vec::with_capacity(dirs.len());
+    if !field.escapes_each(position, normal, &dirs, &mut escaped) {
+        open.clear();
+        return;
+    }
+    let mut rest = escaped.as_slice();
+    for &p in &refined {
+        let k = if deep[p] { DEEP * DEEP } else { LANES };
+        let (sub, more) = rest.split_at(k);
+        rest = more;
+        open[p] = sub.iter().filter(|&&e| e).count() as f32 / k as f32;
     }
 }
 
@@ -79,14 +134,20 @@ fn world(frame: &[Vec3; 3], x: f32, y: f32, z: f32) -> Vec3 {
     (frame[0] * x + frame[1] * y + frame[2] * z).normalize()
 }
 
-/// Whether pixel `p` of the `n × n` grid differs from a 4-neighbour in `open`.
+/// Whether pixel `p` of the `n × n` grid differs from one of its 8
+/// neighbours in `open` (a diagonal one too: an opening's corner may cut
+/// a pixel whose 4 neighbours' centres it misses).
 #[inline(always)]
 fn edge(open: &[f32], n: usize, p: usize) -> bool {
     let (c, r, v) = (p % n, p / n, open[p]);
-    (c > 0 && open[p - 1] != v)
-        || (c + 1 < n && open[p + 1] != v)
-        || (r > 0 && open[p - n] != v)
-        || (r + 1 < n && open[p + n] != v)
+    for rr in r.saturating_sub(1)..(r + 2).min(n) {
+        for cc in c.saturating_sub(1)..(c + 2).min(n) {
+            if open[rr * n + cc] != v {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// `Σ f(p)·w(p)·(L(p) + sky(p)·open(p))` in pixel order, `L(p)` the

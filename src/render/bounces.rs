@@ -6,7 +6,7 @@ use glam::Vec3;
 use super::trace::Tracer;
 use crate::error::Error;
 use crate::gather::{Gather, GatherOptions};
-use crate::microbuffer::{MicroBuffer, NearField};
+use crate::microbuffer::{MicroBuffer, NearField, Sight};
 use crate::points::{PointCloud, Surfel};
 use crate::tree::{NodeId, Tree};
 use rayon::prelude::*;
@@ -135,6 +135,16 @@ impl NearField for SkyRays<'_> {
 
     fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
         Some(self.0.escapes(origin, normal, dir))
+    }
+
+    fn escapes_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) -> bool {
+        self.0.escapes_each(origin, normal, dirs, out);
+        true
+    }
+
+    fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+        self.0.sight_each(origin, normal, dirs, out);
+        true
     }
 }
 

@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::frame::Frame;
 use super::light::Lights;
 use super::trace::Tracer;
-use crate::microbuffer::NearField;
+use crate::microbuffer::{NearField, Sight};
 use crate::points::MAX_RADIANCE;
 use crate::rng::mix;
 use crate::scene::{Scene, SurfacePoint};
@@ -33,6 +33,16 @@ pub struct NearRays<'a> {
 impl NearField for NearRays<'_> {
     fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
         Some(self.tracer.escapes(origin, normal, dir))
+    }
+
+    fn escapes_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) -> bool {
+        self.tracer.escapes_each(origin, normal, dirs, out);
+        true
+    }
+
+    fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+        self.tracer.sight_each(origin, normal, dirs, out);
+        true
     }
 
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {
@@ -89,6 +99,20 @@ impl NearField for Frame<'_> {
     fn escapes(&self, origin: Vec3, normal: Vec3, dir: Vec3) -> Option<bool> {
         // Occlusion sees no sky.
         (!self.opts.ao).then(|| self.tracer.escapes(origin, normal, dir))
+    }
+
+    fn escapes_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) -> bool {
+        if !self.opts.ao {
+            self.tracer.escapes_each(origin, normal, dirs, out);
+        }
+        !self.opts.ao
+    }
+
+    fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+        if !self.opts.ao {
+            self.tracer.sight_each(origin, normal, dirs, out);
+        }
+        !self.opts.ao
     }
 
     fn trace(&self, origin: Vec3, normal: Vec3, dir: Vec3, t_max: f32) -> Option<Vec3> {

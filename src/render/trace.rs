@@ -12,6 +12,7 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 
+use crate::microbuffer::Sight;
 use crate::scene::{AlphaMap, Scene};
 
 /// A ray's closest hit.
@@ -206,6 +207,72 @@ impl Tracer {
         !self.occluded(origin + normal * self.epsilon, dir, f32::INFINITY)
     }
 
+    /// [`escapes`](Self::escapes) for each of `dirs` from one receiver, into
+    /// `out`.
+    pub fn escapes_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) {
+        out.clear();
+        self.stops(origin, normal, dirs, |_, stop| out.push(stop.is_none()));
+    }
+
+    /// For each of `dirs` from one receiver, into `out`: the sky where the
+    /// ray leaves the scene, else a triangle that stops it (the first one
+    /// found, not always the nearest: a thick wall's far face is as
+    /// edge-on as its near one) and the cosine there.
+    pub fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) {
+        out.clear();
+        self.stops(origin, normal, dirs, |d, stop| {
+            out.push(stop.map_or(Sight::Sky, |id| {
+                let tri = &self.triangles[id];
+                let e =
+                    (Vec3::from(tri.v1) - Vec3::from(tri.v0)).cross(Vec3::from(tri.v2) - Vec3::from(tri.v0));
+                Sight::Surface {
+                    cos: e.normalize_or_zero().dot(d).abs(),
+                }
+            }))
+        });
+    }
+
+    /// Calls `each(dir, stop)` for each of `dirs` from a receiver at
+    /// `origin` (unit `normal`), in order: `stop` a triangle the ray meets,
+    /// `None` where it leaves the scene. A receiver's rays mostly stop on a
+    /// few large triangles (its room's walls), so the last [`BLOCKERS`]
+    /// that stopped one are tried before the tree: a hit there is a hit
+    /// whatever else the ray meets, so whether it escapes is as
+    /// [`escapes`](Self::escapes) finds, with most traversals left out.
+    fn stops(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], mut each: impl FnMut(Vec3, Option<usize>)) {
+        let Some(bvh) = self.bvh.as_ref() else {
+            dirs.iter().for_each(|&d| each(d, None));
+            return;
+        };
+        let o = origin + normal * self.epsilon;
+        // The latest first.
+        let mut last = [usize::MAX; BLOCKERS];
+        for &d in dirs {
+            let ray = Ray::new(o.into(), positive_zeros(d).into(), 0.0, f32::INFINITY);
+            if let Some(k) = last
+                .iter()
+                .position(|&id| id != usize::MAX && self.distance(id, &ray).is_finite())
+            {
+                last[..=k].rotate_right(1);
+                each(d, Some(last[0]));
+                continue;
+            }
+            let mut stop = None;
+            bvh.ray_traverse_miss(ray, |r, id| {
+                let t = self.distance(id, r);
+                if t.is_finite() {
+                    stop = Some(id);
+                }
+                t
+            });
+            if let Some(id) = stop {
+                last.rotate_right(1);
+                last[0] = id;
+            }
+            each(d, stop);
+        }
+    }
+
     /// Whether anything lies along `origin + t·dir`, `t ∈ (0, t_max)`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         let Some(bvh) = self.bvh.as_ref() else {
@@ -215,6 +282,10 @@ impl Tracer {
         !bvh.ray_traverse_miss(ray, |r, id| self.distance(id, r))
     }
 }
+
+/// How many of the triangles that last stopped a receiver's rays
+/// [`Tracer::escapes_each`] tries before the tree.
+const BLOCKERS: usize = 4;
 
 /// `v` with each `-0.0` made `+0.0` (`x + 0.0` is `x` otherwise). obvhs's
 /// wide BVH picks a node's slab planes by `dir < 0` (false for `-0.0`) but
@@ -267,7 +338,41 @@ mod tests {
     use glam::Vec3;
 
     use super::Tracer;
+    use crate::microbuffer::Sight;
     use crate::scene::builtin::cornell_box;
+
+    /// A receiver's batch of rays, tried first against the triangles that
+    /// stopped the last ones, escapes exactly where each ray alone does.
+    #[test]
+    fn a_batch_of_rays_escapes_where_each_ray_alone_does() {
+        let tracer = Tracer::new(&cornell_box());
+        let (origin, normal) = (Vec3::new(0.1, 0.5, 0.0), Vec3::Y);
+        // Fibonacci directions over the sphere: the box's walls and blocks,
+        // and its open front.
+        let n = 4000;
+        let dirs: Vec<Vec3> = (0..n)
+            .map(|i| {
+                let z = 1.0 - (2 * i + 1) as f32 / n as f32;
+                let phi = i as f32 * 2.399_963;
+                let r = (1.0 - z * z).sqrt();
+                Vec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect();
+        let alone: Vec<bool> = dirs.iter().map(|&d| tracer.escapes(origin, normal, d)).collect();
+        let escaping = alone.iter().filter(|&&e| e).count();
+        assert!(escaping > n / 20 && escaping < n / 2, "{escaping} of {n} escape");
+        let mut batch = Vec::new();
+        tracer.escapes_each(origin, normal, &dirs, &mut batch);
+        assert_eq!(batch, alone);
+        let mut sight = Vec::new();
+        tracer.sight_each(origin, normal, &dirs, &mut sight);
+        for (s, &e) in sight.iter().zip(&alone) {
+            match *s {
+                Sight::Sky => assert!(e),
+                Sight::Surface { cos } => assert!(!e && (0.0..=1.0).contains(&cos), "{s:?}"),
+            }
+        }
+    }
 
     /// A ray along −z towards the Cornell box's back wall hits it whatever
     /// the signs of its zero components (obvhs's wide BVH missed
