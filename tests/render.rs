@@ -3,7 +3,7 @@
 //! the renderer.
 
 use glam::{DVec3, Vec3};
-use pbgi::render::{Gathers, RenderOptions, render};
+use pbgi::render::{Gathers, RenderError, RenderOptions, render};
 use pbgi::scene::builtin::{cornell_box, cornell_box_glossy};
 use pbgi::scene::{Camera, FovAxis, Material, Mesh, Scene};
 use pbgi::{CutOptions, Isa, Scheme, SchemeChoice};
@@ -464,25 +464,39 @@ fn a_uniform_sky_lights_the_open_box_by_the_form_factor_of_its_opening() {
 
 #[test]
 fn bad_options_are_errors() {
+    // Each refused with the typed error naming the option, not by some
+    // other failure on the way.
     let scene = small(cornell_box());
-    for o in [
-        RenderOptions {
-            spp: 0,
-            ..Default::default()
-        },
-        RenderOptions {
-            microbuffer: 0,
-            ..Default::default()
-        },
-        RenderOptions {
-            cut: CutOptions {
-                max_solid_angle: f32::NAN,
+    for (o, option) in [
+        (
+            RenderOptions {
+                spp: 0,
                 ..Default::default()
             },
-            ..Default::default()
-        },
+            "spp",
+        ),
+        (
+            RenderOptions {
+                microbuffer: 0,
+                ..Default::default()
+            },
+            "microbuffer resolution",
+        ),
+        (
+            RenderOptions {
+                cut: CutOptions {
+                    max_solid_angle: f32::NAN,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            "max_solid_angle",
+        ),
     ] {
-        assert!(render(&scene, &o, &|_, _| {}).is_err());
+        match render(&scene, &o, &|_, _| {}) {
+            Err(RenderError::Kernel(pbgi::Error::InvalidParameter { name, .. })) => assert_eq!(name, option),
+            other => panic!("{option}: {:?}", other.map(|_| "an image")),
+        }
     }
 }
 

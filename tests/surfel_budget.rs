@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use crate::common;
 
-use pbgi::render::{RenderOptions, render};
+use pbgi::render::{RenderError, RenderOptions, render};
 use pbgi::scene::builtin::cornell_box;
 use pbgi::scene::{Light, Scene};
 
@@ -66,10 +66,15 @@ fn the_budget_holds_in_any_units() {
     let mut tiny = mm.clone();
     tiny.camera.width = 4;
     tiny.camera.height = 4;
-    assert!(
-        render(&tiny, &density, &|_, _| {}).is_err(),
-        "8·10⁹ surfels refused"
-    );
+    match render(&tiny, &density, &|_, _| {}) {
+        Err(RenderError::Kernel(pbgi::Error::TooManySurfels { count, max })) => {
+            assert!(
+                count > max && max == pbgi::PointCloud::MAX_SURFELS,
+                "{count} > {max}"
+            )
+        }
+        other => panic!("8·10⁹ surfels: {:?}", other.map(|_| "an image")),
+    }
     let zero = RenderOptions {
         surfel_budget: Some(0),
         ..RenderOptions::default()
