@@ -94,8 +94,9 @@ pub trait NearField: Sync {
         true
     }
 
-    /// What each ray along `dirs` from one receiver meets first, into `out`
-    /// (cleared first); `false` where the field cannot tell. The default
+    /// What each ray along `dirs` from one receiver meets, into `out`
+    /// (cleared first): the sky, or a surface that stops it (the nearest,
+    /// or any one as edge-on); `false` where the field cannot tell. The default
     /// asks [`escapes_each`](Self::escapes_each) and reports every surface
     /// face-on (`cos` 1), so that no pixel refines for meeting one edge-on.
     fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
@@ -115,7 +116,7 @@ pub trait NearField: Sync {
     }
 }
 
-/// What a ray from a receiver meets first ([`NearField::sight_each`]).
+/// What a ray from a receiver meets ([`NearField::sight_each`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Sight {
     /// Nothing at any distance: the environment shows.

@@ -194,9 +194,7 @@ impl Tracer {
             mesh,
             triangle,
             uv,
-            geometric_normal: (Vec3::from(tri.v1) - Vec3::from(tri.v0))
-                .cross(Vec3::from(tri.v2) - Vec3::from(tri.v0))
-                .normalize_or_zero(),
+            geometric_normal: geometric_normal(tri),
         })
     }
 
@@ -221,13 +219,8 @@ impl Tracer {
     pub fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) {
         out.clear();
         self.stops(origin, normal, dirs, |d, stop| {
-            out.push(stop.map_or(Sight::Sky, |id| {
-                let tri = &self.triangles[id];
-                let e =
-                    (Vec3::from(tri.v1) - Vec3::from(tri.v0)).cross(Vec3::from(tri.v2) - Vec3::from(tri.v0));
-                Sight::Surface {
-                    cos: e.normalize_or_zero().dot(d).abs(),
-                }
+            out.push(stop.map_or(Sight::Sky, |id| Sight::Surface {
+                cos: geometric_normal(&self.triangles[id]).dot(d).abs(),
             }))
         });
     }
@@ -295,6 +288,14 @@ const BLOCKERS: usize = 4;
 #[inline(always)]
 fn positive_zeros(v: Vec3) -> Vec3 {
     v + Vec3::ZERO
+}
+
+/// The unit normal of `tri` by its winding (zero for a degenerate one).
+#[inline]
+fn geometric_normal(tri: &Triangle) -> Vec3 {
+    (Vec3::from(tri.v1) - Vec3::from(tri.v0))
+        .cross(Vec3::from(tri.v2) - Vec3::from(tri.v0))
+        .normalize_or_zero()
 }
 
 /// Möller–Trumbore, two-sided: `(t, barycentrics)`, `t = ∞` on a miss.
