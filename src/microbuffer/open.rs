@@ -61,34 +61,41 @@ pub(super) fn open(
 ) {
     let normal = frame[2];
     open.clear();
-    let mut dirs: Vec<Vec3> = t.dir.iter().map(|l| world(frame, l.x, l.y, l.z)).collect();
+    // Plain loops, not iterator adaptors: their closures would be compiled
+    // out of line for the baseline target, outside the kernels' clones.
+    let mut dirs = Vec::with_capacity(t.dir.len());
+    for l in &t.dir {
+        dirs.push(world(frame, l.x, l.y, l.z));
+    }
     let mut sight = Vec::with_capacity(dirs.len());
     if !field.sight_each(position, normal, &dirs, &mut sight) {
         return;
     }
-    open.extend(sight.iter().map(|&s| if s == Sight::Sky { 1.0f32 } else { 0.0 }));
     // Decided on the pixel-centre rays alone, then refined: a refined
     // pixel's fraction must not decide whether its neighbour is an edge.
     // Pixels whose centre ray meets a surface edge-on, and their
     // neighbours (an opening seen edge-on may lie in a pixel whose own
     // centre ray passes beside the surface); the most edge-on more finely.
-    let grazing: Vec<f32> = sight
-        .iter()
-        .map(|s| {
-            if matches!(s, Sight::Surface { cos } if *cos < GRAZING) {
+    let mut grazing = Vec::with_capacity(sight.len());
+    let mut deep = Vec::with_capacity(sight.len());
+    for s in &sight {
+        let cos = match *s {
+            Sight::Sky => {
+                open.push(1.0f32);
                 1.0
-            } else {
-                0.0
             }
-        })
-        .collect();
-    let deep: Vec<bool> = sight
-        .iter()
-        .map(|s| matches!(s, Sight::Surface { cos } if *cos < GRAZING / 4.0))
-        .collect();
-    let mut refine: Vec<bool> = (0..open.len())
-        .map(|p| grazing[p] == 1.0 || edge(&grazing, t.n, p))
-        .collect();
+            Sight::Surface { cos } => {
+                open.push(0.0);
+                cos
+            }
+        };
+        grazing.push(if cos < GRAZING { 1.0f32 } else { 0.0 });
+        deep.push(cos < GRAZING / 4.0);
+    }
+    let mut refine = Vec::with_capacity(open.len());
+    for p in 0..open.len() {
+        refine.push(grazing[p] == 1.0 || edge(&grazing, t.n, p));
+    }
     for &p in &frags.pixel {
         refine[p as usize] |= open[p as usize] == 1.0;
     }
@@ -96,7 +103,12 @@ pub(super) fn open(
         *r |= edge(open, t.n, p);
     }
     // Every refined pixel's sub-samples, in pixel order, as one batch.
-    let refined: Vec<usize> = (0..open.len()).filter(|&p| refine[p]).collect();
+    let mut refined = Vec::new();
+    for (p, &r) in refine.iter().enumerate() {
+        if r {
+            refined.push(p);
+        }
+    }
     dirs.clear();
     let h = 2.0 / t.n as f64;
     for &p in &refined {
@@ -112,7 +124,9 @@ pub(super) fn open(
             continue;
         }
         let [sx, sy, sz] = &t.sub[p];
-        dirs.extend((0..LANES).map(|k| world(frame, sx[k], sy[k], sz[k])));
+        for k in 0..LANES {
+            dirs.push(world(frame, sx[k], sy[k], sz[k]));
+        }
     }
     let mut escaped = Vec::with_capacity(dirs.len());
     if !field.escapes_each(position, normal, &dirs, &mut escaped) {
@@ -124,7 +138,11 @@ pub(super) fn open(
         let k = if deep[p] { DEEP * DEEP } else { LANES };
         let (sub, more) = rest.split_at(k);
         rest = more;
-        open[p] = sub.iter().filter(|&&e| e).count() as f32 / k as f32;
+        let mut n = 0u32;
+        for &e in sub {
+            n += e as u32;
+        }
+        open[p] = n as f32 / k as f32;
     }
 }
 
