@@ -15,8 +15,8 @@ pub fn lambert_sample(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 
 /// A glossy lobe: `f_s(ωi, ωo) = specular · (e + 2)/(2π) · max(0, r·ωi)^e`,
 /// `r` the mirror direction of `ωo`, exponent `e = 2/α² − 2` from the
-/// roughness `α`. At normal incidence its albedo is `specular·(e+2)/(e+1)`
-/// times the fraction of the lobe above the surface, so about `specular`.
+/// roughness `α`. At normal incidence its albedo is exactly `specular`;
+/// away from it part of the lobe falls below the surface and is lost.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlossyLobe {
     /// Reflectance of the lobe, RGB.
@@ -102,8 +102,14 @@ mod tests {
         (sum / m as f64) as f32
     }
 
+    /// At normal incidence the whole lobe is above the surface and its
+    /// albedo is exactly `specular`: `(e+2)/(2π) ∫ cos^(e+1)θ dω = 1`. The
+    /// estimate's weight `specular·(e+2)/(e+1)·cosθ` varies by at most 13 %
+    /// (roughness 0.5), so 200,000 samples hold it within 0.03 % (one
+    /// standard deviation); asserted within 0.2 %. At 60° the lobe reaches
+    /// below the surface and loses energy, never gains it.
     #[test]
-    fn energy_at_normal_incidence_is_about_specular_and_bounded() {
+    fn albedo_is_specular_at_normal_incidence_and_below_it_at_grazing() {
         for roughness in [0.05, 0.2, 0.5] {
             let lobe = GlossyLobe {
                 specular: Vec3::splat(0.6),
@@ -111,14 +117,73 @@ mod tests {
             };
             let a = albedo(&lobe, Vec3::Z, Vec3::Z);
             assert!(
-                a <= 0.6 * 1.01,
-                "roughness {roughness}: albedo {a} exceeds specular"
+                (a / 0.6 - 1.0).abs() < 0.002,
+                "roughness {roughness}: albedo {a} at normal incidence, exactly 0.6"
             );
+            let wo = Vec3::new(3f32.sqrt() / 2.0, 0.0, 0.5);
+            let a = albedo(&lobe, Vec3::Z, wo);
             assert!(
-                a > 0.6 * 0.8,
-                "roughness {roughness}: albedo {a} far below specular"
+                a <= 0.6 * 1.002,
+                "roughness {roughness}: albedo {a} at 60° exceeds specular"
             );
         }
+    }
+
+    /// `sample` draws what `pdf` describes: the angle α from the mirror
+    /// direction, binned, against each bin's probability integrated from
+    /// `pdf` by quadrature (χ² over 12 bins, 11 degrees of freedom: 40 is
+    /// exceeded with probability 10⁻⁴), and the azimuth about it uniform.
+    #[test]
+    fn sample_follows_pdf() {
+        let lobe = GlossyLobe {
+            specular: Vec3::ONE,
+            roughness: 0.3,
+        };
+        let (n, wo) = (Vec3::Z, Vec3::new(0.5, 0.1, 0.8).normalize());
+        let r = 2.0 * n.dot(wo) * n - wo;
+        let (t, b) = r.any_orthonormal_pair();
+        let at = |alpha: f64, phi: f64| {
+            (r.as_dvec3() * alpha.cos() + (t.as_dvec3() * phi.cos() + b.as_dvec3() * phi.sin()) * alpha.sin())
+                .as_vec3()
+        };
+        // Bins of α over [0, 1) rad (the lobe's width is about 0.3), the
+        // last one everything beyond.
+        let edges: Vec<f64> = (0..=11).map(|k| k as f64 / 11.0).collect();
+        let mut want = Vec::new();
+        for w in edges.windows(2) {
+            let steps = 200;
+            let h = (w[1] - w[0]) / steps as f64;
+            let mut p = 0.0;
+            for k in 0..steps {
+                let alpha = w[0] + (k as f64 + 0.5) * h;
+                p += lobe.pdf(n, wo, at(alpha, 0.7)) as f64 * std::f64::consts::TAU * alpha.sin() * h;
+            }
+            want.push(p);
+        }
+        want.push(1.0 - want.iter().sum::<f64>());
+        let mut rng = Rng::new(11);
+        let m = 200_000;
+        let (mut got, mut quadrant) = (vec![0u32; want.len()], [0u32; 4]);
+        for _ in 0..m {
+            let (wi, _) = lobe.sample(n, wo, rng.f32(), rng.f32());
+            let alpha = (r.dot(wi).clamp(-1.0, 1.0) as f64).acos();
+            got[((alpha * 11.0) as usize).min(11)] += 1;
+            quadrant[(t.dot(wi) < 0.0) as usize * 2 + (b.dot(wi) < 0.0) as usize] += 1;
+        }
+        let chi2: f64 = got
+            .iter()
+            .zip(&want)
+            .map(|(&g, &p)| (g as f64 - m as f64 * p).powi(2) / (m as f64 * p))
+            .sum();
+        assert!(
+            chi2 < 40.0,
+            "χ² {chi2}: counts {got:?} against probabilities {want:?}"
+        );
+        let chi2: f64 = quadrant
+            .iter()
+            .map(|&q| (q as f64 - m as f64 / 4.0).powi(2) / (m as f64 / 4.0))
+            .sum();
+        assert!(chi2 < 22.0, "azimuth not uniform: quadrants {quadrant:?}");
     }
 
     /// The sharpest lobe (roughness clamped at 10⁻³: exponent ≈ 2·10⁶)
