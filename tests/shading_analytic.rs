@@ -63,10 +63,13 @@ fn irradiance_pipelines(
     (scalar, lanes)
 }
 
-/// Inward-facing surfels on a Fibonacci sphere of radius 1, disks covering it.
-fn sphere(n: usize) -> Tree {
+/// Inward-facing surfels on a Fibonacci sphere of radius 1 with radiance
+/// `radiance(p)` at the surfel at `p`, the disks' areas summing to the
+/// sphere's (disks 5 % wider gave irradiance 10 % above the exact answer:
+/// they stand for 10 % more surface).
+fn sphere(n: usize, radiance: impl Fn(Vec3) -> Vec3) -> Tree {
     let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    let radius = (4.0 / n as f32).sqrt() * 1.05; // disk area ≈ 4π/n, a little overlap
+    let radius = (4.0 / n as f32).sqrt();
     let surfels = (0..n)
         .map(|i| {
             let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
@@ -76,11 +79,34 @@ fn sphere(n: usize) -> Tree {
                 position: p,
                 normal: -p.normalize(),
                 radius,
-                radiance: Vec3::splat(L),
+                radiance: radiance(p),
             }
         })
         .collect();
     Tree::build(&PointCloud::new(surfels).unwrap())
+}
+
+/// `∫ L(p(ω)) n·ω dω` over the hemisphere about unit `n` at `q` inside the
+/// unit sphere, `p(ω)` where the ray from `q` along `ω` leaves it: by the
+/// midpoint rule in `(sin²θ, φ)`, where the cosine weight is uniform.
+fn irradiance_in_sphere(q: Vec3, n: Vec3, radiance: impl Fn(Vec3) -> f64) -> f64 {
+    let (q, n) = (q.as_dvec3(), n.as_dvec3());
+    let (t, b) = n.any_orthonormal_pair();
+    let (m, k) = (600, 1200);
+    let mut e = 0.0;
+    for i in 0..m {
+        let s2 = (i as f64 + 0.5) / m as f64;
+        let (sin, cos) = (s2.sqrt(), (1.0 - s2).sqrt());
+        for j in 0..k {
+            let phi = std::f64::consts::TAU * (j as f64 + 0.5) / k as f64;
+            let w = t * (sin * phi.cos()) + b * (sin * phi.sin()) + n * cos;
+            let qw = q.dot(w);
+            let d = -qw + (qw * qw - q.length_squared() + 1.0).sqrt();
+            e += radiance((q + w * d).as_vec3());
+        }
+    }
+    // ½ dμ dφ per sample: μ = sin²θ, dω·cosθ = ½ dμ dφ.
+    0.5 * e / (m * k) as f64 * std::f64::consts::TAU
 }
 
 /// A square `side × side` of surfels in the plane z = 0 facing +z (centre at the origin).
@@ -105,29 +131,43 @@ fn rel(a: f32, b: f32) -> f32 {
     (a - b).abs() / b
 }
 
+/// A sphere lit unevenly, `L(p) = 2 + p_z + p_x/2` (1 to 3.1), so that
+/// no receiver's answer is the bound `π·max L` the irradiance is clamped
+/// at (a uniform sphere's is, and an over-estimate could not show): against
+/// quadrature, from the centre and off it. Measured: within 0.16 % at
+/// Ω 0.02 and 0.84 % at Ω 0.1 (a cluster's one radiance over its curved
+/// patch), at N 8 and 16; asserted 0.5 % and 1.5 %.
 #[test]
-fn inside_a_uniform_sphere_irradiance_is_pi_l() {
-    let tree = sphere(40_000);
+fn inside_an_unevenly_lit_sphere_irradiance_is_its_integral() {
+    let radiance = |p: Vec3| 2.0 + p.z as f64 + 0.5 * p.x as f64;
+    let tree = sphere(40_000, |p| Vec3::splat(radiance(p) as f32));
     let pairs = [
         (Vec3::ZERO, Vec3::Z),
+        (Vec3::ZERO, -Vec3::Z),
         (Vec3::ZERO, Vec3::new(0.6, 0.0, 0.8)),
         (Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.0, -1.0, 0.0)),
+        (Vec3::new(-0.4, 0.2, -0.5), Vec3::new(0.0, 0.6, 0.8)),
+        (Vec3::new(0.1, 0.6, 0.3), Vec3::new(-0.8, 0.0, -0.6)),
     ];
+    let want: Vec<f64> = pairs
+        .iter()
+        .map(|&(q, n)| irradiance_in_sphere(q, n, radiance))
+        .collect();
     let recs = Receiver::from_pairs(pairs).unwrap();
     for res in [8, 16] {
-        for e in irradiance(&tree, &recs, 0.02, res, Scheme::Packet, Isa::best()) {
-            // Tolerance 1 %: the composed coverage of a closed enclosure
-            // exceeds the hemisphere a little (overlapping splats add
-            // unclamped within a layer), and irradiance is bounded by π·max L,
-            // which is the exact answer here. The convergence of the estimate
-            // itself is asserted on rooms of varying radiance (tests/exact.rs).
-            let err = rel(e.x, std::f32::consts::PI * L);
-            assert!(
-                err < 0.01,
-                "N {res}: E = {} vs πL = {}",
-                e.x,
-                std::f32::consts::PI * L
-            );
+        for (omega, tolerance) in [(0.02, 0.005), (0.1, 0.015)] {
+            for scheme in [Scheme::Packet, Scheme::Single] {
+                let got = irradiance(&tree, &recs, omega, res, scheme, Isa::best());
+                for (i, (e, want)) in got.iter().zip(&want).enumerate() {
+                    let err = e.x as f64 / want - 1.0;
+                    assert!(
+                        err.abs() < tolerance,
+                        "N {res}, Ω {omega}, {scheme:?}, receiver {i}: E = {} vs {want:.4} ({:+.2} %)",
+                        e.x,
+                        err * 100.0
+                    );
+                }
+            }
         }
     }
 }
@@ -393,7 +433,7 @@ fn splat_order_does_not_matter() {
 
 #[test]
 fn occlusion_is_one_inside_a_closed_sphere_and_zero_outside_everything() {
-    let tree = sphere(20_000);
+    let tree = sphere(20_000, |_| Vec3::splat(L));
     let t = Traversal::new(
         &tree,
         CutOptions {
@@ -413,7 +453,11 @@ fn occlusion_is_one_inside_a_closed_sphere_and_zero_outside_everything() {
             buffers: &mut mb,
         },
     );
-    assert!(mb[0].occlusion(&tree) > 0.9, "AO {}", mb[0].occlusion(&tree)); // measured 0.92
+    // The disks' areas sum to the sphere's, so their coverage of the
+    // hemisphere is one on average (overlaps make up for gaps): measured
+    // 0.9991 (disks 5 % wider once hid the gaps' loss behind a clamp at 1).
+    let ao = mb[0].occlusion(&tree);
+    assert!(ao > 0.997, "AO {ao}");
     // Looking away from the sphere, from outside: nothing.
     let out = Receiver::new(Vec3::new(0.0, 3.0, 0.0), Vec3::Y).unwrap();
     let mut mb = vec![MicroBuffer::new(16).unwrap()];
