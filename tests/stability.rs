@@ -35,8 +35,8 @@
 use crate::common;
 
 use common::{
-    CloudSpec, ReceiverSpec, Rng, Shape, all_paths_agree, check_bounded, invariants, max_radiance,
-    path_names, reduced, shade, shade_everywhere, tree_is_finite,
+    CloudSpec, ReceiverSpec, Rng, Shape, all_paths_agree, check_bounded, invariants, irradiance_in_sphere,
+    max_radiance, path_names, reduced, shade, shade_everywhere, tree_is_finite,
 };
 use glam::{DVec3, Vec3};
 use pbgi::synthetic::{box_with_blocks, receivers as box_receivers};
@@ -79,10 +79,10 @@ fn bits(shading: &[(Vec3, f32)]) -> Vec<u32> {
 }
 
 /// Inward-facing surfels on a Fibonacci sphere of radius `r` around `c`,
-/// disks overlapping a little; radiance of surfel `i` from `radiance(i)`.
+/// the disks' areas summing to the sphere's; radiance of surfel `i` from `radiance(i)`.
 fn sphere(n: usize, c: Vec3, r: f32, mut radiance: impl FnMut(usize) -> Vec3) -> Vec<Surfel> {
     let golden = PI * (3.0 - 5f32.sqrt());
-    let disk = r * (4.0 / n as f32).sqrt() * 1.05;
+    let disk = r * (4.0 / n as f32).sqrt();
     (0..n)
         .map(|i| {
             let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
@@ -402,25 +402,38 @@ fn receivers_on_surfels_inside_clusters_and_on_edges() {
     eprintln!("special receivers: {} on paths {}", receivers.len(), path_names());
 }
 
-/// Receivers exactly on surfels of a closed sphere glowing with radiance L
-/// inside, facing inwards: the irradiance is πL (all that is missing is the
-/// surfel under the receiver and its neighbours cut by the tangent plane).
-/// Asserted within 15 %.
+/// Receivers exactly on surfels of a closed sphere glowing inside, facing
+/// inwards: the sphere fills their hemisphere, so what is missing is at
+/// most the surfel under the receiver and its neighbours cut by the tangent
+/// plane. The glow is uneven, `2 + d_z + d_x/2` at direction `d` from the
+/// centre, so that an over-estimate is not hidden by the clamp at `π·max L`
+/// (a uniform glow's exact answer). Against quadrature: measured −0.06 to
+/// −0.19 % (4,000 or 20,000 surfels), occlusion 0.9985; asserted within
+/// 0.5 % and above 0.995 (were 15 % and 0.85).
 #[test]
 fn on_a_surfel_of_a_closed_glowing_sphere() {
     let n = if reduced() { 4000 } else { 20_000 };
-    let surfels = sphere(n, Vec3::new(3.0, -2.0, 1.0), 2.0, |_| Vec3::splat(2.0));
+    let (c, r) = (Vec3::new(3.0, -2.0, 1.0), 2.0);
+    let glow = |d: Vec3| 2.0 + d.z as f64 + 0.5 * d.x as f64;
+    let mut surfels = sphere(n, c, r, |_| Vec3::ZERO);
+    for s in &mut surfels {
+        s.radiance = Vec3::splat(glow(-s.normal) as f32);
+    }
     let tree = build(&surfels);
-    let receivers =
-        Receiver::from_pairs(surfels.iter().step_by(n / 16).map(|s| (s.position, s.normal))).unwrap();
+    let pairs: Vec<_> = surfels
+        .iter()
+        .step_by(n / 16)
+        .map(|s| (s.position, s.normal))
+        .collect();
+    let receivers = Receiver::from_pairs(pairs.iter().copied()).unwrap();
     let shading = check_all(&surfels, &tree, &receivers, 0.02, 8);
-    for (i, (e, ao)) in shading.iter().enumerate() {
+    for (i, ((e, ao), (q, normal))) in shading.iter().zip(&pairs).enumerate() {
+        let want = irradiance_in_sphere((*q - c) / r, *normal, glow);
         assert!(
-            (e.x / (2.0 * PI) - 1.0).abs() < 0.15,
-            "receiver {i}: E = {e} vs πL = {}",
-            2.0 * PI
+            (e.x as f64 / want - 1.0).abs() < 0.005,
+            "receiver {i}: E = {e} vs {want}"
         );
-        assert!(*ao > 0.85, "receiver {i}: AO {ao}");
+        assert!(*ao > 0.995, "receiver {i}: AO {ao}");
     }
 }
 
@@ -700,8 +713,10 @@ fn every_solid_angle_and_resolution() {
 }
 
 /// An empty cloud shades to exactly zero; one surfel of radiance L seen on
-/// its axis at distance d gives `πL r²/(r² + d²)` (a disk), within the
-/// microbuffer's leaf inflation (radius × 1.2, so up to 1.44× when near).
+/// its axis at distance d gives `πL r²/(r² + d²)` (a disk). Measured at
+/// d = 10⁻³, 0.1, 1, 10: N 12 within 3.1 % (pixels 15° wide, the disk's edge
+/// resolved by their 16 sub-samples), N 64 within 1.1 %; asserted 4 % and
+/// 1.5 % (were 50 %). N 1, one pixel for the hemisphere, is only bounded.
 #[test]
 fn empty_cloud_and_one_surfel() {
     let empty = build(&[]);
@@ -726,14 +741,12 @@ fn empty_cloud_and_one_surfel() {
             (Vec3::new(0.0, 0.0, -d), Vec3::Z),
         ])
         .unwrap();
-        // N 12 is the default grid (N² pixels over the hemisphere); at N 8
-        // a disk covers too few pixel centres for a 50 % bound.
-        for res in [1, 12, 64] {
+        for (res, tolerance) in [(1, f32::INFINITY), (12, 0.04), (64, 0.015)] {
             let shading = check_all(&one, &tree, &recs, 0.05, res);
             let exact = PI * l * 0.25 / (0.25 + d * d);
             let e = shading[0].0.x;
             assert!(
-                e > 0.5 * exact && e < 1.5 * exact,
+                (e / exact - 1.0).abs() <= tolerance,
                 "d {d} N {res}: E = {e} vs {exact}"
             );
             assert_eq!(shading[1], (Vec3::ZERO, 0.0), "behind the disk");
@@ -746,7 +759,9 @@ fn empty_cloud_and_one_surfel() {
 /// huge emitter (a disk of radius 10³, a 2·10³-wide square of surfels, and a
 /// disk of radius `MAX_COORDINATE`, whose area saturates at `f32::MAX`): it
 /// sees nothing else, so the irradiance is π·L (asserted within 2 % for the
-/// disks, 10 % for the square) and the occlusion 1 (≥ 0.95).
+/// disks and the square) and the occlusion 1 (≥ 0.95); tilted 37°,
+/// 0.9·πL and 0.9 (within 3 % at N 8: measured +2.2 % for the disks, where
+/// the horizon crosses the pixels, −0.8 % for the square).
 ///
 /// Not asserted, by design: with Ω ≥ π the node test `π R² < Ω d²` splats a
 /// node even when the receiver is inside its sphere (`d < R ≤ 2d` at Ω = 4π),
@@ -801,7 +816,7 @@ fn stiff_mixes() {
                 (i / 100) as f32 * 20.0 - 990.0,
             ),
             normal: Vec3::Y,
-            radius: 20.0 / PI.sqrt() * 1.1,
+            radius: 20.0 / PI.sqrt(),
             radiance: Vec3::splat(l),
         })
         .collect();
@@ -811,7 +826,7 @@ fn stiff_mixes() {
     }];
     for (name, emitter, tolerance) in [
         ("disk", &disk[..], 0.02),
-        ("square", &square[..], 0.10),
+        ("square", &square[..], 0.02),
         ("largest disk", &largest[..], 0.02),
     ] {
         let tree = build(emitter);
@@ -830,6 +845,61 @@ fn stiff_mixes() {
                 PI * l
             );
             assert!(ao >= 0.95, "{name}, Ω {omega}: AO {ao}");
+            // Tilted by 37°, the plane fills all but a sliver of the
+            // hemisphere: `E = πL(1 + cos 37°)/2 = 0.9·πL`, below the clamp.
+            let (e, ao) = shading[1];
+            assert!(
+                (e.x / (0.9 * PI * l) - 1.0).abs() < 0.03 && (ao - 0.9).abs() < 0.03,
+                "{name}, Ω {omega}, tilted: E = {e} vs 0.9·πL = {}, AO {ao} vs 0.9",
+                0.9 * PI * l
+            );
+        }
+    }
+}
+
+/// Receivers just above a floor of coarse disks (radius 11.3, 20 apart),
+/// 0.32 from a disk's centre, facing down or tilted 37°: the floor fills
+/// their hemisphere but a sliver, `E = πL` and `0.9·πL`. Seen from there a
+/// disk's centre lies at the horizon, and its far-field `Ω = A·cos/d²`
+/// (0.01 at a height of 10⁻⁶) drew it as a small splat: dark at N 8 and 16
+/// below a height of 10⁻⁴, 2.6 % dark at 10⁻². Measured now: within 0.8 %
+/// at N 8, 0.22 % at N 16 and 32 from heights 10⁻⁶ to 1 (asserted 1.5 %
+/// and 0.5 %), facing down exact. Higher up the discretisation shows: at a
+/// height of 10, N 8, facing down, −9 % (N 16 exact; not yet explained).
+#[test]
+fn a_receiver_just_above_a_coarse_floor_off_a_disk_centre() {
+    let l = 7.0;
+    let square: Vec<Surfel> = (0..100 * 100)
+        .map(|i| Surfel {
+            position: Vec3::new(
+                (i % 100) as f32 * 20.0 - 990.0,
+                0.0,
+                (i / 100) as f32 * 20.0 - 990.0,
+            ),
+            normal: Vec3::Y,
+            radius: 20.0 / PI.sqrt(),
+            radiance: Vec3::splat(l),
+        })
+        .collect();
+    let tree = build(&square);
+    let c = square[5050].position;
+    let heights: &[f32] = if reduced() {
+        &[1e-6, 0.1]
+    } else {
+        &[1e-6, 1e-4, 1e-2, 0.1, 1.0]
+    };
+    for &h in heights {
+        let p = c + Vec3::new(0.3, h, 0.1);
+        let recs = Receiver::from_pairs([(p, Vec3::new(0.0, -0.8, 0.6)), (p, -Vec3::Y)]).unwrap();
+        for (res, tolerance) in [(8, 0.015), (16, 0.005), (32, 0.005)] {
+            let shading = check_all(&square, &tree, &recs, 0.05, res);
+            let (tilted, down) = (shading[0].0.x / (0.9 * PI * l), shading[1].0.x / (PI * l));
+            assert!(
+                (tilted - 1.0).abs() < tolerance && (down - 1.0).abs() < 1e-3,
+                "height {h}, N {res}: tilted {:+.2} %, facing down {:+.2} %",
+                (tilted - 1.0) * 100.0,
+                (down - 1.0) * 100.0
+            );
         }
     }
 }

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::buffer::{Fragments, MicroBuffer, key};
 use super::locate::{Located, NodeSplat};
-use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach};
+use super::plan::{ConePlan, DiskPlan, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach, small};
 use super::table::Table;
 use crate::simd::Real;
 use crate::tree::{LEAF, NodeId, SplatRecord};
@@ -140,7 +140,7 @@ impl MicroBuffer {
         let key = key(l.d, node);
         let cos = l.wz.max_of(0.0);
         let radiance = l.radiance;
-        if l.omega < pixel_omega {
+        if small(rec.kind == LEAF, rec.area, l.omega, l.d, pixel_omega) {
             // Also below the horizon, where it adds nothing (cos 0): a cone
             // there would put a pixel's worth at the horizon.
             let reach = reach(t, rec.kind == LEAF, rec.area, l.omega, l.d, pixel);

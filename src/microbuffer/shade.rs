@@ -21,7 +21,7 @@ use super::buffer::{MicroBuffer, key};
 use super::locate::{FrameLanes, NodeLight, NodeSplat, locate};
 use super::near::NearField;
 use super::plan::{
-    ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach,
+    ConePlan, DiskPlan, PixelBox, SmallPlan, pixel_of, plan_cone, plan_disk, plan_small, reach, small,
 };
 use super::table::Table;
 use crate::cut::CutSink;
@@ -341,11 +341,11 @@ fn packet_body(
         let pixel_omega = F32s::gather(&t.solid_angle, pixel);
         // Sub-pixel nodes are small splats also below the horizon (where
         // they add nothing), as in `MicroBuffer::apply`.
-        let small_m = l.omega.lt(pixel_omega);
+        let leaf = rec.kind == LEAF;
+        let small_m = small(leaf, s.area, l.omega, l.d, pixel_omega);
         let cos = l.wz.max_of(zero);
         let small = small_m.to_bitmask() as u16 & show;
         let large = show & !small;
-        let leaf = rec.kind == LEAF;
         let (d, vis) = (l.d.to_array(), visible.to_bitmask() as u16);
         let rad = l.radiance.map(|c| c.to_array());
         let radiance = |i: usize| [rad[0][i], rad[1][i], rad[2][i]];

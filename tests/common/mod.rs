@@ -1251,6 +1251,31 @@ pub fn check_bounded(shading: &[(Vec3, f32)], max_radiance: Vec3) -> Result<(), 
     Ok(())
 }
 
+/// `∫ L(p(ω)) n·ω dω` over the hemisphere about unit `n` at `q` inside or
+/// on the unit sphere about the origin, `p(ω)` where the ray from `q` along `ω` leaves it: by the
+/// midpoint rule in `(sin²θ, φ)`, where the cosine weight is uniform.
+pub fn irradiance_in_sphere(q: Vec3, n: Vec3, radiance: impl Fn(Vec3) -> f64) -> f64 {
+    let (q, n) = (q.as_dvec3(), n.as_dvec3());
+    let (t, b) = n.any_orthonormal_pair();
+    let (m, k) = (600, 1200);
+    let mut e = 0.0;
+    for i in 0..m {
+        let s2 = (i as f64 + 0.5) / m as f64;
+        let (sin, cos) = (s2.sqrt(), (1.0 - s2).sqrt());
+        for j in 0..k {
+            let phi = std::f64::consts::TAU * (j as f64 + 0.5) / k as f64;
+            let w = t * (sin * phi.cos()) + b * (sin * phi.sin()) + n * cos;
+            let qw = q.dot(w);
+            // At most zero under the root only for `q` on the sphere, off
+            // by rounding.
+            let d = -qw + (qw * qw - q.length_squared() + 1.0).max(0.0).sqrt();
+            e += radiance((q + w * d).as_vec3());
+        }
+    }
+    // ½ dμ dφ per sample: μ = sin²θ, dω·cosθ = ½ dμ dφ.
+    0.5 * e / (m * k) as f64 * std::f64::consts::TAU
+}
+
 /// Largest radiance per channel of a cloud.
 pub fn max_radiance(surfels: &[Surfel]) -> Vec3 {
     surfels.iter().fold(Vec3::ZERO, |m, s| m.max(s.radiance))
