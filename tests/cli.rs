@@ -279,3 +279,43 @@ fn the_camera_options_move_the_camera() {
     let (ok, text) = run(&["--camera-origin", "1,2"]);
     assert!(!ok && text.contains("X,Y,Z"), "{text}");
 }
+
+/// One exit status per class of error (`pbgi --help`): 2 for the command
+/// line (clap's own errors, and options the render refuses, both kinds of
+/// bad crop alike), 3 for an input, 4 for an output.
+#[test]
+fn each_class_of_error_has_its_exit_status() {
+    let dir = scratch("exit");
+    let missing_dir = dir.join("no-such-folder").join("out.png");
+    let cases: [(&[&str], i32); 8] = [
+        (&["render", "--no-such-option"], 2),
+        (&["render", "--spp", "0", "--resolution", "8x8"], 2),
+        (&["render", "--crop", "0,0,4", "--resolution", "8x8"], 2),
+        (&["render", "--crop", "0,0,64,64", "--resolution", "8x8"], 2),
+        (&["render", "--resolution", "8x8", "-o", "image.txt"], 2),
+        (&["render", "no-such-scene.obj"], 3),
+        (&["compare", "no-such-image.exr", "no-such-reference.exr"], 3),
+        (
+            &[
+                "render",
+                "--resolution",
+                "8x8",
+                "--spp",
+                "1",
+                "-o",
+                missing_dir.to_str().unwrap(),
+            ],
+            4,
+        ),
+    ];
+    for (args, want) in cases {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("pbgi runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(want), "pbgi {}: {stderr}", args.join(" "));
+        assert!(!stderr.contains("panicked"), "pbgi {}: {stderr}", args.join(" "));
+    }
+}

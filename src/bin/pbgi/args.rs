@@ -8,7 +8,14 @@ use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, ReferenceOptions, Rende
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
 #[derive(Parser)]
-#[command(name = "pbgi", version, about = "Point-based global illumination renderer")]
+#[command(
+    name = "pbgi",
+    version,
+    about = "Point-based global illumination renderer",
+    after_help = "Exit status: 0 done; 1 the work failed (a self-check, a value that is not finite); \
+                  2 a bad command line; 3 a scene, mesh, image or tree file missing or invalid; \
+                  4 the output could not be written."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -241,9 +248,9 @@ pub fn parse_gathers(g: &str) -> Res<Gathers> {
         "sparse" => Ok(Gathers::default()),
         g => match (g.parse(), Gathers::default()) {
             (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
-            _ => {
-                Err(format!("--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels").into())
-            }
+            _ => Err(crate::exit::usage(format!(
+                "--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels"
+            ))),
         },
     }
 }

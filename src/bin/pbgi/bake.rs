@@ -14,13 +14,17 @@ use crate::{StageBars, load_lit_scene, thread_pool};
 /// A tree file, read and checked, with the seconds that took.
 pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
     let t0 = Instant::now();
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file =
+        std::fs::File::open(path).map_err(|e| crate::exit::input(format!("{}: {e}", path.display())))?;
     // A device or a pipe could be endless.
     if !file.metadata().is_ok_and(|m| m.is_file()) {
-        return Err(format!("{}: not a regular file", path.display()).into());
+        return Err(crate::exit::input(format!(
+            "{}: not a regular file",
+            path.display()
+        )));
     }
-    let tree =
-        TreeFile::load(std::io::BufReader::new(file)).map_err(|e| format!("{}: {e}", path.display()))?;
+    let tree = TreeFile::load(std::io::BufReader::new(file))
+        .map_err(|e| crate::exit::input(format!("{}: {e}", path.display())))?;
     Ok((tree, path, t0.elapsed().as_secs_f64()))
 }
 
@@ -42,7 +46,8 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let file = file?;
     let seconds = t0.elapsed().as_secs_f64();
     let bytes = file.to_bytes();
-    std::fs::write(&out_path, &bytes).map_err(|e| format!("{}: {e}", out_path.display()))?;
+    std::fs::write(&out_path, &bytes)
+        .map_err(|e| crate::exit::output(format!("{}: {e}", out_path.display())))?;
     let b = file.bake();
     println!(
         "pbgi bake: {} ({} triangles), {} bounce(s){}, density {}{}",

@@ -42,7 +42,7 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
         .reference_dir
         .clone()
         .unwrap_or_else(|| a.out.join("references"));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    std::fs::create_dir_all(&dir).map_err(|e| crate::exit::output(format!("{}: {e}", dir.display())))?;
     // The references: the path tracer at --reference-spp, a new seed per frame.
     let mut references = Vec::with_capacity(n);
     for k in 0..n {
@@ -110,16 +110,16 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
     // Frames rendered beforehand: `label,spp,seconds,image`, the image a
     // pattern with `{}` for the frame number, seconds per frame.
     for csv in &a.denoised {
-        let text = std::fs::read_to_string(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let text = std::fs::read_to_string(csv)
+            .map_err(|e| crate::exit::input(format!("{}: {e}", csv.display())))?;
         let base = csv.parent().unwrap_or(Path::new("."));
-        for e in external_points(&text).map_err(|e| format!("{}: {e}", csv.display()))? {
+        for e in external_points(&text).map_err(|e| crate::exit::input(format!("{}: {e}", csv.display())))? {
             if !e.image.contains("{}") {
-                return Err(format!(
+                return Err(crate::exit::input(format!(
                     "{}: {}: a frame pattern needs {{}} for the frame number",
                     csv.display(),
                     e.image
-                )
-                .into());
+                )));
             }
             let frames = (0..n)
                 .map(|k| read_exr(&frame_file(&base.join(&e.image), k)))
@@ -129,9 +129,9 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
     }
     let table = markdown(&scene.name, n, a.reference_spp, &rows);
     print!("{table}");
-    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    std::fs::create_dir_all(&a.out).map_err(|e| crate::exit::output(format!("{}: {e}", a.out.display())))?;
     let md = a.out.join("flicker.md");
-    std::fs::write(&md, &table).map_err(|e| format!("{}: {e}", md.display()))?;
+    std::fs::write(&md, &table).map_err(|e| crate::exit::output(format!("{}: {e}", md.display())))?;
     let csv = a.out.join("flicker.csv");
     let mut text = String::from("label,spp,frame_error,flicker,seconds_per_frame\n");
     for r in &rows {
@@ -145,7 +145,7 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
             r.seconds
         );
     }
-    std::fs::write(&csv, text).map_err(|e| format!("{}: {e}", csv.display()))?;
+    std::fs::write(&csv, text).map_err(|e| crate::exit::output(format!("{}: {e}", csv.display())))?;
     println!("wrote {}, {}", md.display(), csv.display());
     Ok(())
 }

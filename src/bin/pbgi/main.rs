@@ -5,6 +5,7 @@
 
 mod args;
 mod bake;
+mod exit;
 mod flicker;
 mod overrides;
 mod path;
@@ -46,7 +47,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(exit::code(&*e))
         }
     }
 }
@@ -75,7 +76,7 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> Res<rayon::ThreadPool> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         if n == 0 {
-            return Err("--threads must be at least 1".into());
+            return Err(exit::usage("--threads must be at least 1"));
         }
         b = b.num_threads(n);
     }
@@ -100,13 +101,14 @@ pub(crate) fn load_lit_scene(name: &str, env: &EnvironmentArgs) -> Res<pbgi::sce
             .split(',')
             .map(|t| t.trim().parse::<f32>())
             .collect::<Result<_, _>>()
-            .map_err(|e| format!("--sky {sky:?}: {e} (expected R,G,B or one value)"))?;
+            .map_err(|e| exit::usage(format!("--sky {sky:?}: {e} (expected R,G,B or one value)")))?;
         let l = match v[..] {
             [x] => glam::Vec3::splat(x),
             [r, g, b] => glam::Vec3::new(r, g, b),
-            _ => return Err(format!("--sky {sky:?}: expected R,G,B or one value").into()),
+            _ => return Err(exit::usage(format!("--sky {sky:?}: expected R,G,B or one value"))),
         };
-        scene.environment = Some(Environment::uniform(l).map_err(|e| format!("--sky {sky:?}: {e}"))?);
+        scene.environment =
+            Some(Environment::uniform(l).map_err(|e| exit::usage(format!("--sky {sky:?}: {e}")))?);
     }
     if let Some(path) = &env.envmap {
         let map = pbgi::scene::formats::read_lat_long(path, env.envmap_scale)?;
@@ -255,14 +257,13 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
     let images = std::iter::once((&a.image, &image)).chain(a.reference.iter().zip(&references));
     for (path, i) in images {
         if (i.width, i.height) != (w, h) {
-            return Err(format!(
+            return Err(exit::usage(format!(
                 "{}: {}×{} pixels, but the scene {} renders {w}×{h}: name the scene the images show with --scene, and their view with --resolution and --camera-*",
                 path.display(),
                 i.width,
                 i.height,
                 a.scene
-            )
-            .into());
+            )));
         }
     }
     let mask = pbgi::report::emitter_mask(&scene);
@@ -297,7 +298,7 @@ fn cmd_compare(a: &CompareArgs) -> Res<()> {
             image.height,
             image::ExtendedColorType::Rgb8,
         )
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| exit::output(format!("{}: {e}", path.display())))?;
         println!(
             "wrote {} (red: too bright, blue: too dark, full at ±25 % of the mean)",
             path.display()
@@ -320,7 +321,10 @@ pub(crate) fn check_output(path: &Path) -> Res<()> {
         .as_deref()
     {
         Some("png") | Some("exr") => Ok(()),
-        _ => Err(format!("{}: output must end in .png or .exr", path.display()).into()),
+        _ => Err(exit::usage(format!(
+            "{}: output must end in .png or .exr",
+            path.display()
+        ))),
     }
 }
 
@@ -344,7 +348,7 @@ pub(crate) fn write_image(img: &Image, path: &Path) -> Res<()> {
             .write()
             .non_parallel()
             .to_file(path)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+            .map_err(|e| exit::output(format!("{}: {e}", path.display())))?;
     } else {
         image::save_buffer(
             path,
@@ -353,7 +357,7 @@ pub(crate) fn write_image(img: &Image, path: &Path) -> Res<()> {
             img.height,
             image::ExtendedColorType::Rgb8,
         )
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| exit::output(format!("{}: {e}", path.display())))?;
     }
     Ok(())
 }
@@ -547,7 +551,7 @@ pub(crate) fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
             px[pos.y() * *w + pos.x()] = glam::Vec3::new(r, g, b);
         },
     )
-    .map_err(|e| format!("{}: {e}", path.display()))?;
+    .map_err(|e| exit::input(format!("{}: {e}", path.display())))?;
     let size = img.layer_data.size;
     let (_, pixels) = img.layer_data.channel_data.pixels;
     Ok(pbgi::render::Image {

@@ -30,11 +30,10 @@ pub fn cameras(file: &Path, scene: &Scene) -> Res<Vec<pbgi::scene::Camera>> {
 pub fn pattern(output: Option<&Path>, scene: &str) -> Res<PathBuf> {
     match output {
         Some(p) if p.to_string_lossy().contains("{}") => Ok(p.to_path_buf()),
-        Some(p) => Err(format!(
+        Some(p) => Err(crate::exit::usage(format!(
             "-o {}: a camera path writes one image per frame; put {{}} where the frame number goes (frames/frame-{{}}.exr)",
             p.display()
-        )
-        .into()),
+        ))),
         None => Ok(PathBuf::from(format!("{scene}-{{}}.png"))),
     }
 }

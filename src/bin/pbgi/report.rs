@@ -30,7 +30,9 @@ fn targets(a: &ReportArgs) -> Res<Vec<f64>> {
         .iter()
         .find(|t| !(t.is_finite() && **t > 0.0 && **t < 100.0))
     {
-        return Err(format!("--targets: {t} is not a percentage between 0 and 100").into());
+        return Err(crate::exit::usage(format!(
+            "--targets: {t} is not a percentage between 0 and 100"
+        )));
     }
     Ok(a.targets.iter().map(|t| t / 100.0).collect())
 }
@@ -102,7 +104,11 @@ fn denoised_lists(a: &ReportArgs) -> Res<Vec<(std::path::PathBuf, External)>> {
         for e in external_points(&text).map_err(|e| format!("{}: {e}", csv.display()))? {
             let path = dir.join(&e.image);
             if !path.exists() {
-                return Err(format!("{}: {}: no such image", csv.display(), path.display()).into());
+                return Err(crate::exit::input(format!(
+                    "{}: {}: no such image",
+                    csv.display(),
+                    path.display()
+                )));
             }
             out.push((path, e));
         }
@@ -160,7 +166,10 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
         let mut images = Vec::new();
         for path in &a.reference {
             if !path.exists() {
-                return Err(format!("{}: no such reference image", path.display()).into());
+                return Err(crate::exit::input(format!(
+                    "{}: no such reference image",
+                    path.display()
+                )));
             }
             println!("reference: {}", path.display());
             let image = read_exr(path)?;

@@ -23,11 +23,10 @@ pub fn cmd_scale(a: &BenchArgs) -> Res<()> {
         let dir = pbgi::scene::catalogue::scene_dir();
         let paths: Vec<PathBuf> = DRAGONS.iter().map(|f| dir.join(f)).collect();
         if let Some(missing) = paths.iter().find(|p| !p.is_file()) {
-            return Err(format!(
+            return Err(crate::exit::input(format!(
                 "{} not found: run scripts/fetch-scenes.sh (the dragon comes from npm), or name the meshes",
                 missing.display()
-            )
-            .into());
+            )));
         }
         paths.iter().map(|p| p.display().to_string()).collect()
     } else {
