@@ -344,7 +344,10 @@ fn every_scheme_and_path_shades_bit_identically() {
         2,
     ));
     let resolutions: &[usize] = if quick() { &[1, 8] } else { &[1, 4, 8, 16] };
-    for jitter in [0.0, 1.0] {
+    // Emulated, jittered receivers only: this test was 477 s of the ARM
+    // stage's 869 s suite under qemu (two threads), the longest by far.
+    let jitters: &[f32] = if quick() { &[1.0] } else { &[0.0, 1.0] };
+    for &jitter in jitters {
         let recs = pbgi::synthetic::receivers(if quick() { 3 } else { 24 }, 0.01, jitter, 4);
         for omega in [0.01, 0.1] {
             for &res in resolutions {
