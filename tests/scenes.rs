@@ -399,15 +399,18 @@ fn the_cli_bounds_its_numbers_and_names_a_missing_file() {
     let dir = temp_dir("cli-files");
     let missing = dir.join("missing.xml");
     let (code, err) = run(&["render", missing.to_str().unwrap()]);
-    assert_eq!(code, Some(1));
+    // An input error: exit status 3 (`pbgi --help`).
+    assert_eq!(code, Some(3), "{err}");
     assert!(
         err.contains(&format!("{}: not found", missing.display())),
         "{err}"
     );
-    let (_, err) = run(&["render", dir.to_str().unwrap()]);
+    let (code, err) = run(&["render", dir.to_str().unwrap()]);
     assert!(err.contains("a folder, not a regular file"), "{err}");
+    assert_eq!(code, Some(3), "{err}");
     // A name that is no scene still lists the scenes.
-    let (_, err) = run(&["render", "cornel-box"]);
+    let (code, err) = run(&["render", "cornel-box"]);
+    assert_eq!(code, Some(3), "{err}");
     assert!(
         err.contains("no scene or file named") && err.contains("cornell-box"),
         "{err}"

@@ -808,18 +808,7 @@ fn stiff_mixes() {
         radius: 1e3,
         radiance: Vec3::splat(l),
     }];
-    let square: Vec<Surfel> = (0..100 * 100)
-        .map(|i| Surfel {
-            position: Vec3::new(
-                (i % 100) as f32 * 20.0 - 990.0,
-                0.0,
-                (i / 100) as f32 * 20.0 - 990.0,
-            ),
-            normal: Vec3::Y,
-            radius: 20.0 / PI.sqrt(),
-            radiance: Vec3::splat(l),
-        })
-        .collect();
+    let square = coarse_floor(l);
     let largest = [Surfel {
         radius: pbgi::points::MAX_COORDINATE,
         ..disk[0]
@@ -857,6 +846,23 @@ fn stiff_mixes() {
     }
 }
 
+/// A 2,000 × 2,000 floor at y = 0 facing up: 100 × 100 disks 20 apart of
+/// radiance `l`, their areas summing to the floor's.
+fn coarse_floor(l: f32) -> Vec<Surfel> {
+    (0..100 * 100)
+        .map(|i| Surfel {
+            position: Vec3::new(
+                (i % 100) as f32 * 20.0 - 990.0,
+                0.0,
+                (i / 100) as f32 * 20.0 - 990.0,
+            ),
+            normal: Vec3::Y,
+            radius: 20.0 / PI.sqrt(),
+            radiance: Vec3::splat(l),
+        })
+        .collect()
+}
+
 /// Receivers just above a floor of coarse disks (radius 11.3, 20 apart),
 /// 0.32 from a disk's centre, facing down or tilted 37°: the floor fills
 /// their hemisphere but a sliver, `E = πL` and `0.9·πL`. Seen from there a
@@ -869,18 +875,7 @@ fn stiff_mixes() {
 #[test]
 fn a_receiver_just_above_a_coarse_floor_off_a_disk_centre() {
     let l = 7.0;
-    let square: Vec<Surfel> = (0..100 * 100)
-        .map(|i| Surfel {
-            position: Vec3::new(
-                (i % 100) as f32 * 20.0 - 990.0,
-                0.0,
-                (i / 100) as f32 * 20.0 - 990.0,
-            ),
-            normal: Vec3::Y,
-            radius: 20.0 / PI.sqrt(),
-            radiance: Vec3::splat(l),
-        })
-        .collect();
+    let square = coarse_floor(l);
     let tree = build(&square);
     let c = square[5050].position;
     let heights: &[f32] = if reduced() {
