@@ -41,28 +41,26 @@ impl fmt::Display for Classed {
 
 impl Error for Classed {}
 
-/// A command line that asks for something impossible.
-pub fn usage(message: impl Into<String>) -> Box<dyn Error> {
+fn classed(code: u8, message: impl Into<String>) -> Box<dyn Error> {
     Box::new(Classed {
-        code: USAGE,
+        code,
         message: message.into(),
     })
+}
+
+/// A command line that asks for something impossible.
+pub fn usage(message: impl Into<String>) -> Box<dyn Error> {
+    classed(USAGE, message)
 }
 
 /// An input that cannot be read.
 pub fn input(message: impl Into<String>) -> Box<dyn Error> {
-    Box::new(Classed {
-        code: INPUT,
-        message: message.into(),
-    })
+    classed(INPUT, message)
 }
 
 /// An output that cannot be written.
 pub fn output(message: impl Into<String>) -> Box<dyn Error> {
-    Box::new(Classed {
-        code: OUTPUT,
-        message: message.into(),
-    })
+    classed(OUTPUT, message)
 }
 
 /// The exit status of `e`.

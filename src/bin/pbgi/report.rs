@@ -99,9 +99,10 @@ fn sweep_options(a: &ReportArgs, emitters: bool) -> Res<SweepOptions> {
 fn denoised_lists(a: &ReportArgs) -> Res<Vec<(std::path::PathBuf, External)>> {
     let mut out = Vec::new();
     for csv in &a.denoised {
-        let text = std::fs::read_to_string(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let text = std::fs::read_to_string(csv)
+            .map_err(|e| crate::exit::input(format!("{}: {e}", csv.display())))?;
         let dir = csv.parent().unwrap_or(std::path::Path::new("."));
-        for e in external_points(&text).map_err(|e| format!("{}: {e}", csv.display()))? {
+        for e in external_points(&text).map_err(|e| crate::exit::input(format!("{}: {e}", csv.display())))? {
             let path = dir.join(&e.image);
             if !path.exists() {
                 return Err(crate::exit::input(format!(
