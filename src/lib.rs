@@ -129,6 +129,8 @@ mod polygon;
 
 pub mod gather;
 
+pub mod cache;
+
 pub mod rng;
 pub mod synthetic;
 

@@ -8,6 +8,7 @@
 mod common;
 
 mod bad_input;
+mod cache;
 mod camera_path;
 mod cli;
 mod cut_equivalence;

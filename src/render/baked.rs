@@ -59,6 +59,19 @@ pub(super) fn needs_points(opts: &RenderOptions, environment: &Option<Arc<Enviro
     opts.ao || opts.bounces > 0 || environment.is_some()
 }
 
+/// A gather threshold: finite, at least 0.
+fn check_threshold(threshold: f32) -> Result<(), RenderError> {
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "gather threshold",
+            value: threshold.to_string(),
+            expected: "a finite relative change of at least 0",
+        }
+        .into());
+    }
+    Ok(())
+}
+
 /// Checks the scene and the options a render and a bake share.
 pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
     scene.validate()?;
@@ -79,14 +92,10 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
             }
             .into());
         }
-        if !(threshold.is_finite() && threshold >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "gather threshold",
-                value: threshold.to_string(),
-                expected: "a finite relative change of at least 0",
-            }
-            .into());
-        }
+        check_threshold(threshold)?;
+    }
+    if let Gathers::Cache { threshold } = opts.gathers {
+        check_threshold(threshold)?;
     }
     opts.surfel_density(scene)?;
     crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;

@@ -5,8 +5,8 @@
 //! the frame's grid that meet its window: a pixel's samples are seeded by
 //! its place in the full frame, so it comes out the same, bit for bit.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -16,12 +16,14 @@ use super::baked::{
     bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
     needs_points, tracer_and_lights,
 };
+use super::cached::Shared;
 use super::image::Image;
 use super::light::Lights;
 use super::options::{Crop, RenderOptions};
 use super::output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
 use super::shading::{ShadingPoint, shading_point};
 use super::trace::Tracer;
+use crate::cache::Cache;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
 use crate::environment::Environment;
 use crate::error::Error;
@@ -88,6 +90,9 @@ pub struct Frame<'s> {
     /// What the open part of a receiver's hemisphere sees, and camera rays
     /// that leave the scene (none in AO mode).
     environment: Option<Arc<Environment>>,
+    /// The world-space records gathered so far ([`Gathers::Cache`]): a
+    /// later frame of this bake gathers only what none before it needed.
+    cache: Mutex<Option<Cache>>,
 }
 
 impl<'s> Frame<'s> {
@@ -188,6 +193,7 @@ impl<'s> Frame<'s> {
             stages,
             needs_points,
             environment,
+            cache: Mutex::new(None),
         })
     }
 
@@ -470,6 +476,16 @@ impl<'s> Frame<'s> {
         let done = AtomicU64::new(0);
         let timers = Timers::default();
         let lattice = self.lattice(&gather, &timers)?;
+        let mut cache = self
+            .cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let cached = self.prepare_cache(&mut cache, &gather, &timers)?;
+        let shared = match (&lattice, cache.as_ref().filter(|_| cached.is_some())) {
+            (Some(l), _) => Some(Shared::Lattice(l)),
+            (None, Some(c)) => Some(Shared::Cache(c)),
+            (None, None) => None,
+        };
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
@@ -481,7 +497,7 @@ impl<'s> Frame<'s> {
                 let out = self.render_tile(
                     tile,
                     [&gather, glossy.as_ref().unwrap_or(&gather)],
-                    lattice.as_ref(),
+                    shared.as_ref(),
                     &timers,
                 )?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -496,6 +512,10 @@ impl<'s> Frame<'s> {
         if let Some(l) = &lattice {
             stats.merge(&l.stats);
             receivers += l.count;
+        }
+        if let Some(c) = &cached {
+            stats.merge(&c.stats);
+            receivers += c.count;
         }
         for (out, st, n) in tiles {
             for (i, c) in out {

@@ -12,7 +12,8 @@
 //! file, [`bake_tree`]);
 //! `shading` (shading points), `frame` (the frame, tile by tile, each packet
 //! through a [`Gatherer`](crate::gather::Gatherer)), `sparse` (the lattice of
-//! sparse gathers), `share` (which samples it does not serve share a
+//! sparse gathers), `cached` (the frame's records of the world-space
+//! cache, `crate::cache`), `share` (which samples it does not serve share a
 //! gather), `tile` (one tile's camera samples);
 //! `image` and `output` (what comes out); `reference` (the path tracer the
 //! report measures against).
@@ -20,6 +21,7 @@
 mod bake;
 mod baked;
 mod bounces;
+mod cached;
 mod frame;
 mod image;
 mod light;

@@ -81,6 +81,13 @@ pub enum Gathers {
         /// Relative change of the gathered light that refines a cell.
         threshold: f32,
     },
+    /// Gathers at records in world space, shared by every sample, tile and
+    /// frame that sees them, refined where the records of a surface differ
+    /// by more than `threshold` of their sum (`crate::cache`).
+    Cache {
+        /// Relative difference between blended records that refines.
+        threshold: f32,
+    },
 }
 
 impl Default for Gathers {
@@ -99,6 +106,7 @@ impl std::fmt::Display for Gathers {
             Gathers::Sparse { spacing, threshold } => {
                 write!(f, "sparse, {spacing} px apart, refined at {threshold} change")
             }
+            Gathers::Cache { threshold } => write!(f, "cached in world space, refined at {threshold} change"),
         }
     }
 }

@@ -1,6 +1,6 @@
 //! One 4×4-pixel tile of a frame: its camera samples, their direct light,
 //! and their indirect light: interpolated from the frame's lattice of sparse
-//! gathers (`sparse`), or gathered at the sample itself when no lattice
+//! gathers (`sparse`) or its world-space records (`cached`), or gathered at the sample itself when no lattice
 //! point around it lies on its surface, when its material is glossy or
 //! bumped (`Frame::gathers_per_sample`), or when every sample
 //! gathers (`Gathers::All`, the dense render).
@@ -9,11 +9,12 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use super::cached::Shared;
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
 use super::share::{Group, Unserved, centre_rank, quarter, share};
-use super::sparse::{Lattice, Served};
+use super::sparse::Served;
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::rng::mix;
@@ -38,7 +39,7 @@ impl Frame<'_> {
         &self,
         tile: usize,
         gathers: [&Gather; 2],
-        lattice: Option<&Lattice>,
+        shared: Option<&Shared>,
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
         let opts = &self.opts;
@@ -83,7 +84,7 @@ impl Frame<'_> {
                 for pp in points {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
-                    match lattice.filter(|_| !per_sample) {
+                    match shared.filter(|_| !per_sample) {
                         Some(l) => match l.irradiance(pp.film, sp.position, sp.normal, eye) {
                             Served::Light(e) => served.push((s, pp, e)),
                             Served::NoCorner => own.push((s, pp, Group::Pixel)),
@@ -111,7 +112,7 @@ impl Frame<'_> {
             // one indirect term, whether gathered, interpolated or shared.
             let interpolated = served
                 .into_iter()
-                .map(|(s, pp, e)| (s, pp, e, "interpolation from the lattice"));
+                .map(|(s, pp, e)| (s, pp, e, "interpolation from the lattice or the cache"));
             let shared = sharing
                 .into_iter()
                 .map(|(s, pp, leader)| (s, pp, e[leader], "a gather shared in the pixel"));

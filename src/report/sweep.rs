@@ -131,6 +131,7 @@ fn gathers_text(g: Gathers) -> String {
             format!("sparse gathers {spacing} px, threshold {threshold}")
         }
         Gathers::All => "dense gathers".into(),
+        Gathers::Cache { threshold } => format!("cached gathers, threshold {threshold}"),
     }
 }
 

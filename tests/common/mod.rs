@@ -32,6 +32,14 @@ pub fn reduced() -> bool {
     cases() < 50
 }
 
+/// True in CI (`CI=true`, as `.ci/run` sets it) or with `PBGI_DEEP_TESTS`
+/// set: the few tests that are slow by nature (long bit-identity sweeps,
+/// path-traced references) run at their full depth there, and at a depth
+/// that keeps the README's test command within minutes elsewhere.
+pub fn deep() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true") || std::env::var_os("PBGI_DEEP_TESTS").is_some()
+}
+
 /// Names of the paths this CPU runs, for the log line of each test.
 pub fn path_names() -> String {
     Isa::available()

@@ -241,15 +241,17 @@ impl Settings {
 }
 
 /// `--gathers`: "all" (every camera sample gathers), "sparse" (the default
-/// lattice), or a number: sparse gathers that many pixels apart.
+/// lattice), "cache" (world-space records), or a number: sparse gathers
+/// that many pixels apart.
 pub fn parse_gathers(g: &str) -> Res<Gathers> {
     match g.trim() {
         "all" => Ok(Gathers::All),
         "sparse" => Ok(Gathers::default()),
+        "cache" => Ok(Gathers::Cache { threshold: 0.1 }),
         g => match (g.parse(), Gathers::default()) {
             (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
             _ => Err(crate::exit::usage(format!(
-                "--gathers: {g:?} is neither \"sparse\", \"all\" nor a spacing in pixels"
+                "--gathers: {g:?} is neither \"sparse\", \"cache\", \"all\" nor a spacing in pixels"
             ))),
         },
     }
@@ -332,15 +334,17 @@ pub struct RenderArgs {
     pub spp: Option<u32>,
     /// Where the indirect light is gathered: "sparse" (a lattice of pixels,
     /// refined at edges and where the light changes, interpolated at each
-    /// camera sample) or "all" (at every camera sample: the dense render, for
-    /// validation).
+    /// camera sample), "cache" (records on the surfaces in world space,
+    /// shared by the pixels, tiles and frames that see them) or "all" (at
+    /// every camera sample: the dense render, for validation).
     #[arg(long, default_value = "sparse")]
     pub gathers: String,
     /// Pixels between sparse gathers on smooth surfaces (a power of two, 1 to 64).
     #[arg(long, default_value_t = 4)]
     pub gather_spacing: u32,
-    /// Relative change of the gathered light across a lattice cell that
-    /// refines it (smaller: more gathers, closer to the dense render).
+    /// Relative change of the gathered light across a lattice cell, or
+    /// between the cache records a point blends, that refines it (smaller:
+    /// more gathers, closer to the dense render).
     #[arg(long, default_value_t = 0.1)]
     pub gather_threshold: f32,
     /// Area-light samples at each camera sample's receiver for direct light
@@ -519,6 +523,9 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
                 } else {
                     spacing
                 },
+                threshold: a.gather_threshold,
+            },
+            Gathers::Cache { .. } => Gathers::Cache {
                 threshold: a.gather_threshold,
             },
             g => g,

@@ -1,0 +1,444 @@
+//! A world-space irradiance cache: records of gathered irradiance on the
+//! scene's surfaces, shared by every camera sample, tile and frame that
+//! sees them (Ward, Rubinstein and Clear 1988), placed so that the light
+//! at a point is a function of the scene and that point alone.
+//!
+//! **Where records go.** An octree of cells spans the tree's bounding
+//! cube ([`grid`]). A cell at a level holds at most one record per facing
+//! (the six axis directions): the surfel of that facing nearest the cell's
+//! centre, gathered where it lies. A record's place and light depend on its
+//! cell alone, never on who asked for it, in which order or on which thread.
+//!
+//! **What a point takes.** At each level from the coarsest, a point blends
+//! the records of the 27 cells around its own that lie on its surface (the
+//! screen lattice's plane and normal tests, [`Record::covers`]) and within a
+//! cell's side of it, weighted by `(1 − d/h)²`. Where they weigh too little
+//! in all (no record near it on its surface) or differ by more than
+//! `threshold` of their sum, it looks one level finer; at the finest level
+//! (cells about two surfel radii across) it is served, or told to gather
+//! itself (no record on its surface, or light that still changes by more
+//! than twice the threshold). The choice reads the records alone, so a tile,
+//! a crop or a later frame gets the bits a full render from scratch gets.
+//!
+//! **Who gathers.** [`Cache::prepare`] runs level by level over the points a
+//! frame will ask for: the cells they need that hold no record yet are
+//! gathered in packets of 16 neighbours facing one way, then the points
+//! that must look finer go on to the next level. A later frame gathers
+//! only the cells no earlier one needed.
+
+mod grid;
+mod record;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::cut::{Receiver, TraversalStats};
+use crate::error::Error;
+use crate::gather::Gather;
+use crate::microbuffer::Convolution;
+use crate::simd::LANES;
+use crate::tree::Tree;
+use grid::{Grid, Key, KeyMap, cell_of, key};
+pub use record::Record;
+
+/// Settings of a [`Cache`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheOptions {
+    /// Relative difference between the records a point blends that sends
+    /// it one level finer.
+    pub threshold: f32,
+}
+
+impl Default for CacheOptions {
+    fn default() -> Self {
+        CacheOptions { threshold: 0.1 }
+    }
+}
+
+/// The least total weight of the records a point blends: below it, no
+/// record lies near enough on its surface, and it looks finer.
+const MIN_WEIGHT: f32 = 0.25;
+
+/// The finest cells are at least this many median surfel radii across.
+const FINEST_RADII: f32 = 2.0;
+
+/// Distance off a record's plane, relative to the cube's side, that is
+/// rounding.
+const SAME_PLANE: f32 = 1e-4;
+
+/// What the cache gives a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lookup {
+    /// The blended light of the records on its surface.
+    Light(Vec3),
+    /// No record lies on its surface near it, even at the finest level (a
+    /// thin object, a point outside the surfels' cube): it gathers.
+    Uncovered,
+    /// At the finest level its records still differ by more than twice
+    /// the threshold: the light changes within a cell, and it gathers.
+    Changing,
+}
+
+/// What a call of [`Cache::prepare`] gathered.
+#[derive(Clone, Debug, Default)]
+pub struct Prepared {
+    /// Records gathered.
+    pub records: usize,
+    /// Traversal counters of their gathers.
+    pub stats: TraversalStats,
+    /// Seconds in the cuts and in splatting and convolving, summed over threads.
+    pub trav: f64,
+    /// See `trav`.
+    pub shading: f64,
+}
+
+/// Why [`Cache::prepare`] failed.
+#[derive(Debug)]
+pub enum CacheError {
+    /// The gather refused a receiver or its options.
+    Gather(Error),
+    /// A record's gather gave a value that is not finite.
+    NonFinite {
+        /// The record's place.
+        position: Vec3,
+        /// What it gathered.
+        value: Vec3,
+    },
+}
+
+impl From<Error> for CacheError {
+    fn from(e: Error) -> Self {
+        CacheError::Gather(e)
+    }
+}
+
+impl std::fmt::Display for CacheError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CacheError::Gather(e) => e.fmt(f),
+            CacheError::NonFinite { position, value } => {
+                write!(
+                    f,
+                    "a cache record at {position} gathered a value that is not finite ({value})"
+                )
+            }
+        }
+    }
+}
+
+impl std::error::Error for CacheError {}
+
+/// The records gathered so far over one tree, and where each may serve.
+pub struct Cache {
+    grid: Grid,
+    threshold: f32,
+    slack: f32,
+    /// The leaves, sorted by their finest Morton code: code, position,
+    /// normal.
+    codes: Vec<u64>,
+    leaves: Vec<(Vec3, Vec3)>,
+    /// Per cell asked for: its records, `records[start..start + count]`.
+    cells: KeyMap<(u32, u32)>,
+    records: Vec<Record>,
+}
+
+/// Which of the six axis directions `n` is closest to.
+#[inline]
+fn facing(n: Vec3) -> u8 {
+    let a = n.abs();
+    let (axis, v) = if a.x >= a.y && a.x >= a.z {
+        (0, n.x)
+    } else if a.y >= a.z {
+        (1, n.y)
+    } else {
+        (2, n.z)
+    };
+    axis * 2 + u8::from(v < 0.0)
+}
+
+/// What the records of one level give a point.
+struct Blend {
+    sum: Vec3,
+    weight: f32,
+    lo: f32,
+    hi: f32,
+}
+
+impl Cache {
+    /// An empty cache over the surfels of `tree`.
+    pub fn new(tree: &Tree, opts: CacheOptions) -> Self {
+        let mut leaves: Vec<(Vec3, Vec3, f32)> = Vec::new();
+        for k in 0..tree.len() as u32 {
+            if tree.is_leaf(k) {
+                let v = tree.node(k);
+                leaves.push((v.centroid, v.normal.normalize_or(Vec3::Z), v.radius));
+            }
+        }
+        let (centre, radius) = if tree.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            tree.sphere(0)
+        };
+        let radius = radius.max(f32::MIN_POSITIVE);
+        let mut radii: Vec<f32> = leaves.iter().map(|l| l.2).collect();
+        let r = if radii.is_empty() {
+            radius
+        } else {
+            let mid = radii.len() / 2;
+            *radii.select_nth_unstable_by(mid, f32::total_cmp).1
+        };
+        // Levels until a cell is about FINEST_RADII surfel radii across.
+        let mut levels = 1;
+        while levels <= grid::MAX_LEVEL && 2.0 * radius / Grid::across(levels) as f32 >= FINEST_RADII * r {
+            levels += 1;
+        }
+        let grid = Grid::new(centre, radius, levels);
+        let mut coded: Vec<(u64, u32)> = leaves
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (grid.code(l.0), i as u32))
+            .collect();
+        coded.sort_unstable();
+        Cache {
+            grid,
+            threshold: opts.threshold,
+            slack: SAME_PLANE * 2.0 * radius,
+            codes: coded.iter().map(|c| c.0).collect(),
+            leaves: coded
+                .iter()
+                .map(|&(_, i)| (leaves[i as usize].0, leaves[i as usize].1))
+                .collect(),
+            cells: KeyMap::default(),
+            records: Vec::new(),
+        }
+    }
+
+    /// Records gathered so far.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    /// Whether no record was gathered yet.
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+
+    /// The records, in the order they were made.
+    pub fn records(&self) -> &[Record] {
+        &self.records
+    }
+
+    /// Levels of cells.
+    pub fn levels(&self) -> u32 {
+        self.grid.levels
+    }
+
+    /// Gathers the records that `points` (position, unit normal) will ask
+    /// [`lookup`](Self::lookup) for and that are not there yet, with
+    /// `gather`'s convolution `what`.
+    pub fn prepare(
+        &mut self,
+        points: &[(Vec3, Vec3)],
+        gather: &Gather,
+        what: Convolution,
+    ) -> Result<Prepared, CacheError> {
+        let mut out = Prepared::default();
+        let mut pending: Vec<u32> = (0..points.len() as u32).collect();
+        for level in 0..self.grid.levels {
+            if pending.is_empty() {
+                break;
+            }
+            // The cells of the pending points, then their neighbourhoods.
+            let mut own: Vec<[u32; 3]> = pending
+                .par_iter()
+                .filter_map(|&i| self.grid.cell(points[i as usize].0, level))
+                .collect();
+            own.par_sort_unstable_by_key(|&c| key(c, level));
+            own.dedup();
+            let mut keys: Vec<Key> = own
+                .iter()
+                .flat_map(|&c| neighbours(c, level))
+                .filter(|k| !self.cells.contains_key(k))
+                .collect();
+            keys.par_sort_unstable();
+            keys.dedup();
+            self.gather_cells(&keys, gather, what, &mut out)?;
+            let last = level + 1 == self.grid.levels;
+            if last {
+                break;
+            }
+            pending = pending
+                .into_par_iter()
+                .filter(|&i| {
+                    let (p, n) = points[i as usize];
+                    self.grid.cell(p, level).is_some() && self.settled(p, n, level).is_none()
+                })
+                .collect();
+        }
+        Ok(out)
+    }
+
+    /// The light at `p` (unit normal `n`) from the records
+    /// [`prepare`](Self::prepare) made for it.
+    pub fn lookup(&self, p: Vec3, n: Vec3) -> Lookup {
+        for level in 0..self.grid.levels {
+            if self.grid.cell(p, level).is_none() {
+                return Lookup::Uncovered;
+            }
+            if let Some(l) = self.settled(p, n, level) {
+                return l;
+            }
+        }
+        Lookup::Uncovered
+    }
+
+    /// What `p` takes at `level`, or `None` where it looks finer.
+    fn settled(&self, p: Vec3, n: Vec3, level: u32) -> Option<Lookup> {
+        let b = self.blend(p, n, level);
+        let finest = level + 1 == self.grid.levels;
+        let spread = b.hi - b.lo;
+        if !finest {
+            return (b.weight >= MIN_WEIGHT && spread <= self.threshold * (b.hi + b.lo))
+                .then(|| Lookup::Light(b.sum / b.weight));
+        }
+        Some(if b.weight <= 0.0 {
+            Lookup::Uncovered
+        } else if spread > 2.0 * self.threshold * (b.hi + b.lo) {
+            Lookup::Changing
+        } else {
+            Lookup::Light(b.sum / b.weight)
+        })
+    }
+
+    /// The records of `level` around `p` on its surface, blended.
+    #[inline]
+    fn blend(&self, p: Vec3, n: Vec3, level: u32) -> Blend {
+        let mut b = Blend {
+            sum: Vec3::ZERO,
+            weight: 0.0,
+            lo: f32::INFINITY,
+            hi: 0.0,
+        };
+        let Some(c) = self.grid.cell(p, level) else {
+            return b;
+        };
+        let h = self.grid.cell_size(level);
+        for k in neighbours(c, level) {
+            let Some(&(start, count)) = self.cells.get(&k) else {
+                continue;
+            };
+            for r in &self.records[start as usize..(start + count) as usize] {
+                let d = (p - r.position).length() / h;
+                if d >= 1.0 || !r.covers(p, n, self.slack) {
+                    continue;
+                }
+                let w = (1.0 - d) * (1.0 - d);
+                b.sum += r.e * w;
+                b.weight += w;
+                let l = r.luminance();
+                b.lo = b.lo.min(l);
+                b.hi = b.hi.max(l);
+            }
+        }
+        b
+    }
+
+    /// The record candidates of the cell `k`: per facing, the leaf nearest
+    /// the cell's centre (the first in code order among equals).
+    fn candidates(&self, k: Key) -> Vec<(Vec3, Vec3)> {
+        let (c, level) = cell_of(k);
+        let (lo, hi) = Grid::codes(c, level);
+        let a = self.codes.partition_point(|&x| x < lo);
+        let b = self.codes.partition_point(|&x| x < hi);
+        let centre = self.grid.centre(c, level);
+        let mut best: [Option<(f32, usize)>; 6] = [None; 6];
+        for i in a..b {
+            let (p, n) = self.leaves[i];
+            let d = (p - centre).length_squared();
+            let slot = &mut best[facing(n) as usize];
+            if slot.is_none_or(|(bd, _)| d < bd) {
+                *slot = Some((d, i));
+            }
+        }
+        best.iter().flatten().map(|&(_, i)| self.leaves[i]).collect()
+    }
+
+    /// Gathers the records of cells `keys` (sorted) and files them.
+    fn gather_cells(
+        &mut self,
+        keys: &[Key],
+        gather: &Gather,
+        what: Convolution,
+        out: &mut Prepared,
+    ) -> Result<(), CacheError> {
+        let found: Vec<Vec<(Vec3, Vec3)>> = keys.par_iter().map(|&k| self.candidates(k)).collect();
+        // Packets of neighbours facing one way.
+        let mut order: Vec<(u8, usize, usize)> = Vec::new();
+        for (j, f) in found.iter().enumerate() {
+            for (i, &(_, n)) in f.iter().enumerate() {
+                order.push((facing(n), j, i));
+            }
+        }
+        order.sort_unstable();
+        let packets = order
+            .par_chunks(LANES)
+            .map_init(
+                || gather.gatherer(),
+                |g, chunk| -> Result<_, CacheError> {
+                    let receivers = chunk
+                        .iter()
+                        .map(|&(_, j, i)| Receiver::new(found[j][i].0, found[j][i].1))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let t0 = Instant::now();
+                    let stats = g.cut(&receivers)?;
+                    let t1 = Instant::now();
+                    let e = g.shade(what);
+                    Ok((e, stats, (t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
+                },
+            )
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut light: Vec<Vec<Vec3>> = found.iter().map(|f| vec![Vec3::ZERO; f.len()]).collect();
+        for (chunk, (e, stats, trav, shading)) in order.chunks(LANES).zip(packets) {
+            out.stats.merge(&stats);
+            out.trav += trav;
+            out.shading += shading;
+            for (&(_, j, i), e) in chunk.iter().zip(e) {
+                if !e.is_finite() {
+                    return Err(CacheError::NonFinite {
+                        position: found[j][i].0,
+                        value: e,
+                    });
+                }
+                light[j][i] = e;
+            }
+        }
+        for ((&k, f), l) in keys.iter().zip(&found).zip(&light) {
+            let start = self.records.len() as u32;
+            for (&(position, normal), &e) in f.iter().zip(l) {
+                self.records.push(Record { position, normal, e });
+            }
+            self.cells.insert(k, (start, f.len() as u32));
+            out.records += f.len();
+        }
+        Ok(())
+    }
+}
+
+/// The keys of the 27 cells around `c` at `level` (itself included) that
+/// lie inside the cube, in a fixed order.
+#[inline]
+fn neighbours(c: [u32; 3], level: u32) -> impl Iterator<Item = Key> {
+    let n = Grid::across(level) as i64;
+    (0..27).filter_map(move |i| {
+        let d = [i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1];
+        let q = [0, 1, 2].map(|a| i64::from(c[a]) + d[a]);
+        q.iter()
+            .all(|&v| (0..n).contains(&v))
+            .then(|| key(q.map(|v| v as u32), level))
+    })
+}
+
+#[cfg(test)]
+mod tests;

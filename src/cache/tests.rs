@@ -1,0 +1,198 @@
+use super::*;
+use crate::gather::GatherOptions;
+use crate::{PointCloud, Surfel};
+
+/// A cache over `tree` with one level, whose cells hold `records` (each in
+/// the cell of its position), as `prepare` would have filed them.
+fn filed(tree: &Tree, records: &[Record]) -> Cache {
+    let mut c = Cache::new(tree, CacheOptions::default());
+    c.grid.levels = 1;
+    let mut by_key: Vec<(Key, Record)> = records
+        .iter()
+        .map(|r| (key(c.grid.cell(r.position, 0).expect("inside"), 0), *r))
+        .collect();
+    by_key.sort_by_key(|k| k.0);
+    // Every cell of the cube was asked for (most hold nothing).
+    let n = Grid::across(0);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                c.cells.insert(key([x, y, z], 0), (0, 0));
+            }
+        }
+    }
+    for (k, r) in by_key {
+        let (start, count) = c.cells[&k];
+        let start = if count == 0 { c.records.len() as u32 } else { start };
+        c.records.push(r);
+        c.cells.insert(k, (start, count + 1));
+    }
+    c
+}
+
+/// A floor (y = 0, up) and a wall (x = 0, facing +x) meeting at the origin,
+/// as surfels 0.1 apart over [0, 4]².
+fn corner() -> Tree {
+    let mut s = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            let (u, v) = (0.05 + 0.1 * i as f32, 0.05 + 0.1 * j as f32);
+            for (position, normal) in [(Vec3::new(u, 0.0, v), Vec3::Y), (Vec3::new(0.0, u, v), Vec3::X)] {
+                s.push(Surfel {
+                    position,
+                    normal,
+                    radius: 0.05,
+                    radiance: Vec3::ZERO,
+                });
+            }
+        }
+    }
+    Tree::build(&PointCloud::new(s).unwrap())
+}
+
+#[test]
+fn records_of_another_surface_never_blend() {
+    let tree = corner();
+    let h = {
+        let c = Cache::new(&tree, CacheOptions::default());
+        c.grid.cell_size(0)
+    };
+    // Records on the floor (light 1) and on the wall (light 10), all near
+    // the edge, within a cell's side of the floor point below.
+    let mut records = Vec::new();
+    for k in 0..4 {
+        let z = 1.0 + 0.3 * k as f32;
+        records.push(Record {
+            position: Vec3::new(0.2, 0.0, z),
+            normal: Vec3::Y,
+            e: Vec3::splat(1.0),
+        });
+        records.push(Record {
+            position: Vec3::new(0.0, 0.2, z),
+            normal: Vec3::X,
+            e: Vec3::splat(10.0),
+        });
+    }
+    let cache = filed(&tree, &records);
+    let p = Vec3::new(0.05, 0.0, 1.4);
+    assert!(
+        (p - records[1].position).length() < h,
+        "the wall's records are near enough to count"
+    );
+    let light = |p: Vec3, n: Vec3| match cache.lookup(p, n) {
+        Lookup::Light(e) => e,
+        other => panic!("{other:?} at {p}"),
+    };
+    assert!((light(p, Vec3::Y) - Vec3::ONE).abs().max_element() < 1e-5);
+    assert!(
+        (light(Vec3::new(0.0, 0.05, 1.4), Vec3::X) - Vec3::splat(10.0))
+            .abs()
+            .max_element()
+            < 1e-4
+    );
+    // A step: a floor 0.2 higher is another surface.
+    assert_eq!(cache.lookup(Vec3::new(0.3, 0.2, 1.4), Vec3::Y), Lookup::Uncovered);
+}
+
+/// The synthetic box, its gather (with the renderer's irradiance settings)
+/// and receivers on its surfaces (facing as they do).
+fn scene(n: usize) -> (Tree, Vec<(Vec3, Vec3)>) {
+    let tree = Tree::build(&crate::synthetic::box_with_blocks(n, 7));
+    let points = crate::synthetic::receivers(40, 0.02, 0.0, 3)
+        .iter()
+        .map(|r| (r.position(), r.normal()))
+        .collect();
+    (tree, points)
+}
+
+fn options(threads: usize) -> GatherOptions {
+    let mut o = GatherOptions {
+        microbuffer: 12,
+        threads: Some(threads),
+        ..GatherOptions::default()
+    };
+    o.cut.max_solid_angle = 0.15;
+    o
+}
+
+fn bits(cache: &Cache, points: &[(Vec3, Vec3)]) -> Vec<[u32; 4]> {
+    points
+        .iter()
+        .map(|&(p, n)| match cache.lookup(p, n) {
+            Lookup::Light(e) => [0, e.x.to_bits(), e.y.to_bits(), e.z.to_bits()],
+            Lookup::Uncovered => [1, 0, 0, 0],
+            Lookup::Changing => [2, 0, 0, 0],
+        })
+        .collect()
+}
+
+#[test]
+fn records_and_lookups_are_the_same_bits_for_any_threads_order_or_subset() {
+    let (tree, points) = scene(6_000);
+    let run = |threads: usize, points: &[(Vec3, Vec3)], parts: usize| {
+        let gather = Gather::new(&tree, &options(threads)).unwrap();
+        let mut cache = Cache::new(&tree, CacheOptions::default());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for part in points.chunks(points.len().div_ceil(parts)) {
+                cache.prepare(part, &gather, Convolution::Irradiance).unwrap();
+            }
+        });
+        cache
+    };
+    let one = run(1, &points, 1);
+    let want = bits(&one, &points);
+    assert!(
+        want.iter().filter(|b| b[0] == 0).count() * 2 > points.len(),
+        "most points are served: the test would prove little"
+    );
+    for threads in [2, 7] {
+        let c = run(threads, &points, 1);
+        assert_eq!(bits(&c, &points), want, "{threads} threads");
+    }
+    // Reversed, and asked for in three parts (as three frames would).
+    let mut rev = points.clone();
+    rev.reverse();
+    let c = run(2, &rev, 3);
+    assert_eq!(bits(&c, &points), want, "reversed, in three parts");
+    // A subset (a crop) gets the same light at its points.
+    let half = &points[..points.len() / 2];
+    let c = run(2, half, 1);
+    assert_eq!(bits(&c, half), want[..half.len()].to_vec(), "a subset");
+    assert!(c.len() < one.len(), "a subset needs fewer records");
+}
+
+#[test]
+fn the_cache_converges_to_the_gathers_as_its_threshold_shrinks() {
+    let (tree, points) = scene(20_000);
+    let gather = Gather::new(&tree, &options(2)).unwrap();
+    let exact = gather.irradiance(&points).unwrap();
+    let error = |threshold: f32| {
+        let mut cache = Cache::new(&tree, CacheOptions { threshold });
+        cache.prepare(&points, &gather, Convolution::Irradiance).unwrap();
+        let (mut num, mut den, mut served) = (0.0f64, 0.0f64, 0);
+        for (&(p, n), e) in points.iter().zip(&exact) {
+            let got = match cache.lookup(p, n) {
+                Lookup::Light(l) => {
+                    served += 1;
+                    l
+                }
+                // Gathered at the point itself.
+                _ => *e,
+            };
+            num += f64::from((got - *e).length_squared());
+            den += f64::from(e.length_squared());
+        }
+        ((num / den).sqrt(), cache.len(), served)
+    };
+    let coarse = error(0.3);
+    let mid = error(0.1);
+    let fine = error(0.03);
+    eprintln!("threshold 0.3 / 0.1 / 0.03: (rel. RMS error, records, served) {coarse:?} {mid:?} {fine:?}");
+    assert!(coarse.0 > mid.0 && mid.0 > fine.0, "{coarse:?} {mid:?} {fine:?}");
+    assert!(mid.0 < 0.05, "{mid:?}");
+    assert!(coarse.1 < mid.1 && mid.1 < fine.1);
+}

@@ -1,0 +1,98 @@
+//! The world-space cache in the renderer (`--gathers cache`): its records
+//! depend on the scene alone, so a crop, a thread count and a later frame of
+//! the same bake give the pixels of a full render from scratch, bit for bit,
+//! and a frame that sees what an earlier one saw gathers nothing new.
+
+use pbgi::render::{Crop, Frame, Gathers, RenderOptions, RenderOutput, render};
+use pbgi::scene::Scene;
+use pbgi::scene::builtin::cornell_box;
+
+fn small() -> Scene {
+    let mut s = cornell_box();
+    s.camera.width = 48;
+    s.camera.height = 40;
+    s
+}
+
+fn opts() -> RenderOptions {
+    RenderOptions {
+        density: 300.0,
+        gathers: Gathers::Cache { threshold: 0.1 },
+        ..Default::default()
+    }
+}
+
+fn bits(out: &RenderOutput) -> Vec<[u32; 3]> {
+    out.image
+        .pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn a_cached_render_is_the_same_bits_cropped_on_any_threads_and_as_a_later_frame() {
+    let s = small();
+    let full = render(&s, &opts(), &|_, _| {}).expect("renders");
+    let want = bits(&full);
+    assert!(
+        full.image.pixels.iter().any(|p| p.max_element() > 0.01),
+        "a black image proves nothing"
+    );
+    // Any number of threads.
+    for threads in [1, 7] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let out = pool.install(|| render(&s, &opts(), &|_, _| {}).unwrap());
+        assert_eq!(bits(&out), want, "{threads} thread(s)");
+        assert_eq!(
+            out.receivers, full.receivers,
+            "{threads} thread(s) gathered as many"
+        );
+    }
+    // A crop off the cells on every side.
+    let crop = Crop {
+        x0: 13,
+        y0: 7,
+        x1: 30,
+        y1: 26,
+    };
+    let part = render(
+        &s,
+        &RenderOptions {
+            crop: Some(crop),
+            ..opts()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(
+        part.receivers < full.receivers,
+        "the crop gathered the whole frame's records"
+    );
+    for y in crop.y0..crop.y1 {
+        for x in crop.x0..crop.x1 {
+            let a = want[(y * s.camera.width + x) as usize];
+            let b = part.image.pixels[((y - crop.y0) * crop.width() + x - crop.x0) as usize];
+            assert_eq!(a, b.to_array().map(f32::to_bits), "pixel ({x}, {y})");
+        }
+    }
+    // A later frame of one bake: another view first, then the scene's own.
+    let mut frame = Frame::prepare(&s, &opts()).unwrap();
+    let mut side = s.camera;
+    side.origin += glam::Vec3::new(0.2, 0.1, 0.0);
+    frame.set_camera(side).unwrap();
+    let first = frame.render(&|_, _| {}).unwrap();
+    frame.set_camera(s.camera).unwrap();
+    let later = frame.render(&|_, _| {}).unwrap();
+    assert_eq!(bits(&later), want, "a later frame is the render from scratch");
+    assert!(
+        later.receivers < full.receivers / 2,
+        "a later frame reuses the records: {} gathers, {} from scratch ({} in the first frame)",
+        later.receivers,
+        full.receivers,
+        first.receivers
+    );
+}
