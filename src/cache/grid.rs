@@ -11,12 +11,14 @@ pub(super) const COARSE: u32 = 3;
 /// Bits of a cell coordinate at the finest resolution the codes keep.
 const BITS: u32 = 20;
 
-/// The deepest level: the key keeps it in four bits, and cell coordinates
-/// keep within [`BITS`].
+/// The deepest level: the key keeps it in four bits and its cell's Morton
+/// code in 57.
 pub(super) const MAX_LEVEL: u32 = 15;
 
-/// A cell: its level in the top four bits, the Morton code of its
-/// coordinates below.
+/// A cell and a facing: the level in the top four bits, the facing (one of
+/// six axis directions) in the next three, the Morton code of the cell's
+/// coordinates below, so that sorted keys run facing by facing, through
+/// space as neighbours.
 pub(super) type Key = u64;
 
 /// The cube, and how deep its cells go.
@@ -83,17 +85,18 @@ impl Grid {
     }
 }
 
-/// The key of cell `c` at `level`.
+/// The key of cell `c` at `level`, for facing `facing`.
 #[inline]
-pub(super) fn key(c: [u32; 3], level: u32) -> Key {
-    u64::from(level) << 60 | morton3(c)
+pub(super) fn key(c: [u32; 3], level: u32, facing: u8) -> Key {
+    u64::from(level) << 60 | u64::from(facing) << 57 | morton3(c)
 }
 
-/// The cell of `key`: its coordinates and level.
-pub(super) fn cell_of(key: Key) -> ([u32; 3], u32) {
+/// The cell of `key`: its coordinates, level and facing.
+pub(super) fn cell_of(key: Key) -> ([u32; 3], u32, u8) {
     let level = (key >> 60) as u32;
-    let m = key & ((1 << 60) - 1);
-    ([compact(m), compact(m >> 1), compact(m >> 2)], level)
+    let facing = (key >> 57 & 7) as u8;
+    let m = key & ((1 << 57) - 1);
+    ([compact(m), compact(m >> 1), compact(m >> 2)], level, facing)
 }
 
 /// Interleaves the low 20 bits of each coordinate: x in bit 0, y in bit 1,
@@ -158,7 +161,9 @@ mod tests {
         ] {
             for level in [0, 4, MAX_LEVEL] {
                 let c = c.map(|v| v % Grid::across(level));
-                assert_eq!(cell_of(key(c, level)), (c, level));
+                for facing in [0, 5] {
+                    assert_eq!(cell_of(key(c, level, facing)), (c, level, facing));
+                }
             }
         }
         // A point's finest code lies in the range of its cell at every level.

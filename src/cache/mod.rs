@@ -4,13 +4,15 @@
 //! at a point is a function of the scene and that point alone.
 //!
 //! **Where records go.** An octree of cells spans the tree's bounding
-//! cube ([`grid`]). A cell at a level holds at most one record per facing
+//! cube (`grid`). A cell at a level holds at most one record per facing
 //! (the six axis directions): the surfel of that facing nearest the cell's
-//! centre, gathered where it lies. A record's place and light depend on its
+//! centre, gathered where it lies, made only where a point of that facing
+//! asks for it. A record's place and light depend on its
 //! cell alone, never on who asked for it, in which order or on which thread.
 //!
 //! **What a point takes.** At each level from the coarsest, a point blends
-//! the records of the 27 cells around its own that lie on its surface (the
+//! the records of its facing in the 27 cells around its own that lie on
+//! its surface (the
 //! screen lattice's plane and normal tests, [`Record::covers`]) and within a
 //! cell's side of it, weighted by `(1 − d/h)²`. Where they weigh too little
 //! in all (no record near it on its surface) or differ by more than
@@ -139,10 +141,14 @@ pub struct Cache {
     /// normal.
     codes: Vec<u64>,
     leaves: Vec<(Vec3, Vec3)>,
-    /// Per cell asked for: its records, `records[start..start + count]`.
-    cells: KeyMap<(u32, u32)>,
+    /// Per cell and facing asked for: its record's index in `records`, or
+    /// [`NONE`] where the cell holds no surfel of that facing.
+    cells: KeyMap<u32>,
     records: Vec<Record>,
 }
+
+/// A cell without a record.
+const NONE: u32 = u32::MAX;
 
 /// Which of the six axis directions `n` is closest to.
 #[inline]
@@ -250,16 +256,23 @@ impl Cache {
             if pending.is_empty() {
                 break;
             }
-            // The cells of the pending points, then their neighbourhoods.
-            let mut own: Vec<[u32; 3]> = pending
+            // The cells of the pending points, then their neighbourhoods,
+            // each for the points' facing.
+            let mut own: Vec<Key> = pending
                 .par_iter()
-                .filter_map(|&i| self.grid.cell(points[i as usize].0, level))
+                .filter_map(|&i| {
+                    let (p, n) = points[i as usize];
+                    self.grid.cell(p, level).map(|c| key(c, level, facing(n)))
+                })
                 .collect();
-            own.par_sort_unstable_by_key(|&c| key(c, level));
+            own.par_sort_unstable();
             own.dedup();
             let mut keys: Vec<Key> = own
                 .iter()
-                .flat_map(|&c| neighbours(c, level))
+                .flat_map(|&k| {
+                    let (c, level, f) = cell_of(k);
+                    neighbours(c, level, f)
+                })
                 .filter(|k| !self.cells.contains_key(k))
                 .collect();
             keys.par_sort_unstable();
@@ -325,44 +338,45 @@ impl Cache {
             return b;
         };
         let h = self.grid.cell_size(level);
-        for k in neighbours(c, level) {
-            let Some(&(start, count)) = self.cells.get(&k) else {
+        for k in neighbours(c, level, facing(n)) {
+            let Some(&i) = self.cells.get(&k) else {
                 continue;
             };
-            for r in &self.records[start as usize..(start + count) as usize] {
-                let d = (p - r.position).length() / h;
-                if d >= 1.0 || !r.covers(p, n, self.slack) {
-                    continue;
-                }
-                let w = (1.0 - d) * (1.0 - d);
-                b.sum += r.e * w;
-                b.weight += w;
-                let l = r.luminance();
-                b.lo = b.lo.min(l);
-                b.hi = b.hi.max(l);
+            let Some(r) = self.records.get(i as usize) else {
+                continue;
+            };
+            let d = (p - r.position).length() / h;
+            if d >= 1.0 || !r.covers(p, n, self.slack) {
+                continue;
             }
+            let w = (1.0 - d) * (1.0 - d);
+            b.sum += r.e * w;
+            b.weight += w;
+            let l = r.luminance();
+            b.lo = b.lo.min(l);
+            b.hi = b.hi.max(l);
         }
         b
     }
 
-    /// The record candidates of the cell `k`: per facing, the leaf nearest
-    /// the cell's centre (the first in code order among equals).
-    fn candidates(&self, k: Key) -> Vec<(Vec3, Vec3)> {
-        let (c, level) = cell_of(k);
+    /// The record candidate of the cell and facing `k`: the leaf of that
+    /// facing nearest the cell's centre (the first in code order among
+    /// equals), if any.
+    fn candidate(&self, k: Key) -> Option<(Vec3, Vec3)> {
+        let (c, level, f) = cell_of(k);
         let (lo, hi) = Grid::codes(c, level);
         let a = self.codes.partition_point(|&x| x < lo);
         let b = self.codes.partition_point(|&x| x < hi);
         let centre = self.grid.centre(c, level);
-        let mut best: [Option<(f32, usize)>; 6] = [None; 6];
+        let mut best: Option<(f32, usize)> = None;
         for i in a..b {
             let (p, n) = self.leaves[i];
             let d = (p - centre).length_squared();
-            let slot = &mut best[facing(n) as usize];
-            if slot.is_none_or(|(bd, _)| d < bd) {
-                *slot = Some((d, i));
+            if facing(n) == f && best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, i));
             }
         }
-        best.iter().flatten().map(|&(_, i)| self.leaves[i]).collect()
+        best.map(|(_, i)| self.leaves[i])
     }
 
     /// Gathers the records of cells `keys` (sorted) and files them.
@@ -373,23 +387,18 @@ impl Cache {
         what: Convolution,
         out: &mut Prepared,
     ) -> Result<(), CacheError> {
-        let found: Vec<Vec<(Vec3, Vec3)>> = keys.par_iter().map(|&k| self.candidates(k)).collect();
-        // Packets of neighbours facing one way.
-        let mut order: Vec<(u8, usize, usize)> = Vec::new();
-        for (j, f) in found.iter().enumerate() {
-            for (i, &(_, n)) in f.iter().enumerate() {
-                order.push((facing(n), j, i));
-            }
-        }
-        order.sort_unstable();
-        let packets = order
+        let found: Vec<Option<(Vec3, Vec3)>> = keys.par_iter().map(|&k| self.candidate(k)).collect();
+        // Sorted keys run facing by facing, neighbours in Morton order: a
+        // packet's receivers face one way and share most of their cuts.
+        let asked: Vec<(Vec3, Vec3)> = found.iter().flatten().copied().collect();
+        let packets = asked
             .par_chunks(LANES)
             .map_init(
                 || gather.gatherer(),
                 |g, chunk| -> Result<_, CacheError> {
                     let receivers = chunk
                         .iter()
-                        .map(|&(_, j, i)| Receiver::new(found[j][i].0, found[j][i].1))
+                        .map(|&(p, n)| Receiver::new(p, n))
                         .collect::<Result<Vec<_>, _>>()?;
                     let t0 = Instant::now();
                     let stats = g.cut(&receivers)?;
@@ -399,44 +408,51 @@ impl Cache {
                 },
             )
             .collect::<Result<Vec<_>, _>>()?;
-        let mut light: Vec<Vec<Vec3>> = found.iter().map(|f| vec![Vec3::ZERO; f.len()]).collect();
-        for (chunk, (e, stats, trav, shading)) in order.chunks(LANES).zip(packets) {
+        let mut light = Vec::with_capacity(asked.len());
+        for (chunk, (e, stats, trav, shading)) in asked.chunks(LANES).zip(packets) {
             out.stats.merge(&stats);
             out.trav += trav;
             out.shading += shading;
-            for (&(_, j, i), e) in chunk.iter().zip(e) {
+            for (&(position, _), e) in chunk.iter().zip(e) {
                 if !e.is_finite() {
-                    return Err(CacheError::NonFinite {
-                        position: found[j][i].0,
-                        value: e,
-                    });
+                    return Err(CacheError::NonFinite { position, value: e });
                 }
-                light[j][i] = e;
+                light.push(e);
             }
         }
-        for ((&k, f), l) in keys.iter().zip(&found).zip(&light) {
-            let start = self.records.len() as u32;
-            for (&(position, normal), &e) in f.iter().zip(l) {
-                self.records.push(Record { position, normal, e });
-            }
-            self.cells.insert(k, (start, f.len() as u32));
-            out.records += f.len();
+        // One light per candidate, in `found`'s order.
+        let mut next = 0;
+        for (&k, f) in keys.iter().zip(&found) {
+            let index = match *f {
+                Some((position, normal)) => {
+                    self.records.push(Record {
+                        position,
+                        normal,
+                        e: light[next],
+                    });
+                    next += 1;
+                    out.records += 1;
+                    self.records.len() as u32 - 1
+                }
+                None => NONE,
+            };
+            self.cells.insert(k, index);
         }
         Ok(())
     }
 }
 
 /// The keys of the 27 cells around `c` at `level` (itself included) that
-/// lie inside the cube, in a fixed order.
+/// lie inside the cube, for facing `f`, in a fixed order.
 #[inline]
-fn neighbours(c: [u32; 3], level: u32) -> impl Iterator<Item = Key> {
+fn neighbours(c: [u32; 3], level: u32, f: u8) -> impl Iterator<Item = Key> {
     let n = Grid::across(level) as i64;
     (0..27).filter_map(move |i| {
         let d = [i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1];
         let q = [0, 1, 2].map(|a| i64::from(c[a]) + d[a]);
         q.iter()
             .all(|&v| (0..n).contains(&v))
-            .then(|| key(q.map(|v| v as u32), level))
+            .then(|| key(q.map(|v| v as u32), level, f))
     })
 }
 

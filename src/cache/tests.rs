@@ -3,29 +3,29 @@ use crate::gather::GatherOptions;
 use crate::{PointCloud, Surfel};
 
 /// A cache over `tree` with one level, whose cells hold `records` (each in
-/// the cell of its position), as `prepare` would have filed them.
+/// the cell of its position, the first of each facing), as `prepare` would
+/// have filed them.
 fn filed(tree: &Tree, records: &[Record]) -> Cache {
     let mut c = Cache::new(tree, CacheOptions::default());
     c.grid.levels = 1;
-    let mut by_key: Vec<(Key, Record)> = records
-        .iter()
-        .map(|r| (key(c.grid.cell(r.position, 0).expect("inside"), 0), *r))
-        .collect();
-    by_key.sort_by_key(|k| k.0);
     // Every cell of the cube was asked for (most hold nothing).
     let n = Grid::across(0);
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                c.cells.insert(key([x, y, z], 0), (0, 0));
+                for f in 0..6 {
+                    c.cells.insert(key([x, y, z], 0, f), NONE);
+                }
             }
         }
     }
-    for (k, r) in by_key {
-        let (start, count) = c.cells[&k];
-        let start = if count == 0 { c.records.len() as u32 } else { start };
-        c.records.push(r);
-        c.cells.insert(k, (start, count + 1));
+    // The first record of each cell and facing.
+    for r in records {
+        let k = key(c.grid.cell(r.position, 0).expect("inside"), 0, facing(r.normal));
+        if c.cells[&k] == NONE {
+            c.cells.insert(k, c.records.len() as u32);
+            c.records.push(*r);
+        }
     }
     c
 }
@@ -57,11 +57,11 @@ fn records_of_another_surface_never_blend() {
         let c = Cache::new(&tree, CacheOptions::default());
         c.grid.cell_size(0)
     };
-    // Records on the floor (light 1) and on the wall (light 10), all near
-    // the edge, within a cell's side of the floor point below.
+    // Records on the floor (light 1) and on the wall (light 10) along the
+    // edge, one per cell, some within a cell's side of the floor point below.
     let mut records = Vec::new();
-    for k in 0..4 {
-        let z = 1.0 + 0.3 * k as f32;
+    for k in 0..40 {
+        let z = 0.05 + 0.1 * k as f32;
         records.push(Record {
             position: Vec3::new(0.2, 0.0, z),
             normal: Vec3::Y,
@@ -75,9 +75,15 @@ fn records_of_another_surface_never_blend() {
     }
     let cache = filed(&tree, &records);
     let p = Vec3::new(0.05, 0.0, 1.4);
+    let near = |n: Vec3| {
+        cache
+            .records
+            .iter()
+            .any(|r| r.normal == n && (p - r.position).length() < h)
+    };
     assert!(
-        (p - records[1].position).length() < h,
-        "the wall's records are near enough to count"
+        near(Vec3::Y) && near(Vec3::X),
+        "records of both surfaces are near enough to count"
     );
     let light = |p: Vec3, n: Vec3| match cache.lookup(p, n) {
         Lookup::Light(e) => e,
@@ -92,6 +98,15 @@ fn records_of_another_surface_never_blend() {
     );
     // A step: a floor 0.2 higher is another surface.
     assert_eq!(cache.lookup(Vec3::new(0.3, 0.2, 1.4), Vec3::Y), Lookup::Uncovered);
+}
+
+/// Fewer surfels under emulation (`PBGI_QC_TESTS` below 50, as the ARM
+/// stage sets it).
+fn emulated() -> bool {
+    std::env::var("PBGI_QC_TESTS")
+        .ok()
+        .and_then(|s| s.trim().parse::<u64>().ok())
+        .is_some_and(|n| n < 50)
 }
 
 /// The synthetic box, its gather (with the renderer's irradiance settings)
@@ -149,8 +164,8 @@ fn records_and_lookups_are_the_same_bits_for_any_threads_order_or_subset() {
         want.iter().filter(|b| b[0] == 0).count() * 2 > points.len(),
         "most points are served: the test would prove little"
     );
-    for threads in [2, 7] {
-        let c = run(threads, &points, 1);
+    for threads in if emulated() { &[2][..] } else { &[2, 7] } {
+        let c = run(*threads, &points, 1);
         assert_eq!(bits(&c, &points), want, "{threads} threads");
     }
     // Reversed, and asked for in three parts (as three frames would).
