@@ -49,6 +49,15 @@ pub(crate) struct CacheGathers {
 }
 
 impl Frame<'_> {
+    /// Where samples take their light from: the lattice, else the cache.
+    pub(crate) fn shared<'a>(lattice: Option<&'a Lattice>, cache: Option<&'a Cache>) -> Option<Shared<'a>> {
+        match (lattice, cache) {
+            (Some(l), _) => Some(Shared::Lattice(l)),
+            (None, Some(c)) => Some(Shared::Cache(c)),
+            (None, None) => None,
+        }
+    }
+
     /// Gathers into `cache` (made here on a frame's first render with the
     /// cache) the records the window's camera samples need; `None` unless
     /// the render gathers through the cache.

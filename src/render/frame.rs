@@ -16,7 +16,6 @@ use super::baked::{
     bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
     needs_points, tracer_and_lights,
 };
-use super::cached::Shared;
 use super::image::Image;
 use super::light::Lights;
 use super::options::{Crop, RenderOptions};
@@ -90,7 +89,7 @@ pub struct Frame<'s> {
     /// What the open part of a receiver's hemisphere sees, and camera rays
     /// that leave the scene (none in AO mode).
     environment: Option<Arc<Environment>>,
-    /// The world-space records gathered so far ([`Gathers::Cache`]): a
+    /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
     cache: Mutex<Option<Cache>>,
 }
@@ -481,11 +480,7 @@ impl<'s> Frame<'s> {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let cached = self.prepare_cache(&mut cache, &gather, &timers)?;
-        let shared = match (&lattice, cache.as_ref().filter(|_| cached.is_some())) {
-            (Some(l), _) => Some(Shared::Lattice(l)),
-            (None, Some(c)) => Some(Shared::Cache(c)),
-            (None, None) => None,
-        };
+        let shared = Self::shared(lattice.as_ref(), cache.as_ref().filter(|_| cached.is_some()));
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
