@@ -508,9 +508,12 @@ impl<'s> Frame<'s> {
             stats.merge(&l.stats);
             receivers += l.count;
         }
+        let (mut records, mut held) = (0, 0);
         if let Some(c) = &cached {
             stats.merge(&c.stats);
             receivers += c.count;
+            records = c.count;
+            held = cache.as_ref().map_or(0, |c| c.len());
         }
         for (out, st, n) in tiles {
             for (i, c) in out {
@@ -539,6 +542,8 @@ impl<'s> Frame<'s> {
             isa: gather.path().isa,
             surfels: self.surfels,
             receivers,
+            records,
+            cached: held,
             stages: self.stages.clone(),
         })
     }

@@ -71,6 +71,12 @@ pub struct RenderOutput {
     pub surfels: usize,
     /// Receivers shaded.
     pub receivers: usize,
+    /// Of them, records of the world-space cache gathered for this frame
+    /// (`Gathers::Cache`; 0 otherwise, and in a later frame that found
+    /// every record it needed).
+    pub records: usize,
+    /// Records the cache holds after this frame.
+    pub cached: usize,
     /// Every stage, run or left out.
     pub stages: Vec<Stage>,
 }

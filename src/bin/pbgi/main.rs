@@ -415,13 +415,18 @@ pub(crate) fn print_summary(
     );
     if out.surfels > 0 {
         println!(
-            "{} surfels ({}), {} receivers gathered, {:.0} nodes tested per receiver{}",
+            "{} surfels ({}), {} receivers gathered{}, {:.0} nodes tested per receiver{}",
             out.surfels,
             match opts.surfel_budget {
                 Some(b) => format!("budget {b}"),
                 None => format!("density {}", opts.density),
             },
             out.receivers,
+            if let Gathers::Cache { .. } = opts.gathers {
+                format!(" ({} of them cache records, {} held)", out.records, out.cached)
+            } else {
+                String::new()
+            },
             out.stats.nodes_per_receiver(),
             out.stats
                 .lane_utilization()

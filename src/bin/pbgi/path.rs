@@ -67,7 +67,8 @@ pub fn render_path(
         write_image(&out.image, &path)?;
         seconds.push(clock.elapsed().as_secs_f64());
         written.push(format!(
-            "frame {k:04}: wrote {} (image digest {:016x})",
+            "frame {k:04}: {} receivers gathered, wrote {} (image digest {:016x})",
+            out.receivers,
             path.display(),
             out.image.digest()
         ));
