@@ -150,9 +150,10 @@ pub struct Cache {
 /// A cell without a record.
 const NONE: u32 = u32::MAX;
 
-/// Which of the six axis directions `n` is closest to.
+/// Which of the six axis directions `n` is closest to: receivers (and
+/// records) facing one way share most of their cuts.
 #[inline]
-fn facing(n: Vec3) -> u8 {
+pub(crate) fn facing(n: Vec3) -> u8 {
     let a = n.abs();
     let (axis, v) = if a.x >= a.y && a.x >= a.z {
         (0, n.x)

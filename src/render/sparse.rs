@@ -29,6 +29,7 @@ use super::frame::{Frame, Timers};
 use super::options::Gathers;
 use super::output::RenderError;
 use super::shading::{ShadingPoint, shading_point};
+use crate::cache::facing;
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::simd::LANES;
@@ -390,20 +391,6 @@ impl Frame<'_> {
         }
         Ok((e, stats))
     }
-}
-
-/// Which of the six axis directions `n` is closest to: receivers facing
-/// one way share most of their cuts.
-fn facing(n: Vec3) -> u8 {
-    let a = n.abs();
-    let (axis, v) = if a.x >= a.y && a.x >= a.z {
-        (0, n.x)
-    } else if a.y >= a.z {
-        (1, n.y)
-    } else {
-        (2, n.z)
-    };
-    axis * 2 + u8::from(v < 0.0)
 }
 
 #[cfg(test)]
