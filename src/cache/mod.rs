@@ -44,6 +44,7 @@ use crate::simd::LANES;
 use crate::tree::Tree;
 use grid::{Grid, Key, KeyMap, cell_of, key};
 pub use record::Record;
+pub(crate) use record::same_surface;
 
 /// Settings of a [`Cache`].
 #[derive(Clone, Copy, Debug, PartialEq)]

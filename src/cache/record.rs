@@ -4,14 +4,29 @@
 
 use glam::Vec3;
 
-/// Cosine between two normals of one surface (18°): a curved surface's
-/// records still serve each other, a box's faces never.
+/// Cosine between two normals of one surface (18°): a curved surface (the
+/// nave's piers, a vault, the bunny) is one surface, a box's faces are not;
+/// at 5.7° the lattice refined curved surfaces to single pixels.
 pub(crate) const SAME_NORMAL: f32 = 0.95;
 
 /// Distance off a record's plane, relative to the distance along it, that
 /// a surface curving by 5.7° keeps; normals further apart allow their
 /// angle's sine. A step is two surfaces.
 pub(crate) const CURVATURE: f32 = 0.05;
+
+/// Whether a point at `p` with normal `n` lies on the surface through
+/// `position` with normal `normal` (both unit), `slack` the distance off
+/// its plane that is rounding: normals within 18°, and off the plane by no
+/// more than the slack and the bend the normals allow (a step is two
+/// surfaces). The screen lattice's corners and the cache's records share it.
+#[inline]
+pub(crate) fn same_surface(position: Vec3, normal: Vec3, p: Vec3, n: Vec3, slack: f32) -> bool {
+    let d = p - position;
+    normal.dot(n) >= SAME_NORMAL && {
+        let bend = normal.cross(n).length().max(CURVATURE);
+        normal.dot(d).abs() <= slack + bend * d.length()
+    }
+}
 
 /// A gathered point: where, which way it faces, and what its microbuffer
 /// gave (irradiance, or occlusion in AO mode).
@@ -30,11 +45,7 @@ impl Record {
     /// surface, `slack` the distance off its plane that is rounding.
     #[inline]
     pub fn covers(&self, p: Vec3, n: Vec3, slack: f32) -> bool {
-        let d = p - self.position;
-        self.normal.dot(n) >= SAME_NORMAL && {
-            let bend = self.normal.cross(n).length().max(CURVATURE);
-            self.normal.dot(d).abs() <= slack + bend * d.length()
-        }
+        same_surface(self.position, self.normal, p, n, slack)
     }
 
     /// The record's light in one number (the sum of its channels).

@@ -29,22 +29,14 @@ use super::frame::{Frame, Timers};
 use super::options::Gathers;
 use super::output::RenderError;
 use super::shading::{ShadingPoint, shading_point};
-use crate::cache::facing;
+use crate::cache::{facing, same_surface};
 use crate::cut::{Receiver, TraversalStats};
 use crate::gather::{Gather, Gatherer};
 use crate::simd::LANES;
 
-/// Cosine between two normals of one surface (18°): a curved surface (the
-/// nave's piers, a vault, the bunny) refined to single pixels at 5.7°
-/// (BENCHMARKS.md, "Sparse gathers on curved surfaces").
-const SAME_NORMAL: f32 = 0.95;
 /// Distance off a gathered point's plane, relative to the camera's
 /// distance, that is rounding.
 const SAME_PLANE: f32 = 1e-4;
-/// Distance off the plane, relative to the distance along it, that a
-/// surface curving by 5.7° keeps; normals further apart allow their angle's
-/// sine (a facet's edge between the points). A step is two surfaces.
-const CURVATURE: f32 = 0.05;
 /// The side, in pixels, of the smallest cell an edge halves. Stopping at
 /// two-pixel cells (a sample there blends the corners on its own side)
 /// saved a fifth to a half of the gathers at no measured cost against the
@@ -67,11 +59,7 @@ impl Record {
     /// Whether a point at `p` with normal `n`, seen from `eye`, lies on this
     /// record's surface.
     pub fn covers(&self, p: Vec3, n: Vec3, eye: Vec3) -> bool {
-        let d = p - self.position;
-        self.normal.dot(n) >= SAME_NORMAL && {
-            let bend = self.normal.cross(n).length().max(CURVATURE);
-            self.normal.dot(d).abs() <= SAME_PLANE * (p - eye).length() + bend * d.length()
-        }
+        same_surface(self.position, self.normal, p, n, SAME_PLANE * (p - eye).length())
     }
 }
 
