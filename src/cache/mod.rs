@@ -29,7 +29,7 @@
 //! only the cells no earlier one needed.
 
 mod grid;
-mod record;
+pub(crate) mod record;
 
 use std::time::Instant;
 
@@ -44,7 +44,6 @@ use crate::simd::LANES;
 use crate::tree::Tree;
 use grid::{Grid, Key, KeyMap, cell_of, key};
 pub use record::Record;
-pub(crate) use record::same_surface;
 
 /// Settings of a [`Cache`].
 #[derive(Clone, Copy, Debug, PartialEq)]
