@@ -84,7 +84,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::{CutOptions, Receiver, Scheme, SchemeChoice, Traversal};
 use crate::environment::Environment;
 use crate::error::{Error, Invalid};
-use crate::microbuffer::{Convolution, MicroBuffer, NearField};
+use crate::microbuffer::{Convolution, Gradients, MicroBuffer, NearField};
 use crate::simd::{Isa, LANES};
 use crate::tree::Tree;
 
@@ -298,6 +298,16 @@ impl<'t> Gather<'t> {
     pub fn irradiance(&self, receivers: &[(Vec3, Vec3)]) -> Result<Vec<Vec3>, Error> {
         let r = checked(receivers.iter().map(|&(p, n)| (p, n, Vec3::Y)))?;
         self.run(&r, Convolution::Irradiance, |_, e, _| e)
+    }
+
+    /// [`irradiance`](Self::irradiance) and its [`Gradients`] at each
+    /// receiver: how it changes as the receiver moves and turns, and the
+    /// harmonic mean distance of what it sees (an irradiance cache's
+    /// records).
+    pub fn irradiance_gradients(&self, receivers: &[(Vec3, Vec3)]) -> Result<Vec<(Vec3, Gradients)>, Error> {
+        let r = checked(receivers.iter().map(|&(p, n)| (p, n, Vec3::Y)))?;
+        let tree = self.tree();
+        self.run(&r, Convolution::Irradiance, |_, e, mb| (e, mb.gradients(tree)))
     }
 
     /// Ambient occlusion in [0, 1] at each receiver `(position, normal)`.

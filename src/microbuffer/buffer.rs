@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::compose;
 pub(crate) use super::fragments::Fragments;
+use super::gradients::{self, Gradients};
 use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
 use super::near::{self, Near, NearField};
 use super::open;
@@ -270,6 +271,21 @@ impl MicroBuffer {
     #[inline(always)]
     fn sky(&self) -> Option<open::Sky<'_>> {
         open::Sky::of(self.environment.as_deref(), self.frame)
+    }
+
+    /// The irradiance's gradients at this receiver, from the composed
+    /// pixels and the distances to what they show (`gradients`): how
+    /// [`irradiance`](Self::irradiance) changes as the receiver moves and
+    /// turns, and the harmonic mean distance of what it sees.
+    pub fn gradients(&self, tree: &Tree) -> Gradients {
+        gradients::gradients(
+            &self.table,
+            &self.frags,
+            tree,
+            &self.site(),
+            self.sky().as_ref(),
+            &mut compose::Scratch::default(),
+        )
     }
 
     /// Glossy reflection towards `wo` (world, unit):

@@ -145,6 +145,11 @@ pub(crate) struct Scratch {
     pub radiance: Vec<Vec3>,
     /// Per pixel `∫ max(0, n·ω) dω` about a tilted normal (`Site::shading`).
     tilted: Vec<f32>,
+    /// Per pixel, where asked (`compose`'s `depths`): the sum of `1/d` over
+    /// its sub-samples that show a fragment, `d` the nearest one's depth
+    /// there, and how many do, both as fractions of the pixel.
+    pub inverse: Vec<f32>,
+    pub drawn: Vec<f32>,
 }
 
 /// A fragment at a pixel's sub-samples: its `Lanes` less the far depth
@@ -184,7 +189,8 @@ fn mean(v: F32s) -> f32 {
 /// Composes every pixel of `t` from `frags` (in any order), seen from
 /// `site`, into `s.cover` (and `s.radiance`); returns the brightest
 /// radiance among the fragments, per channel. `radiance`: also sum the
-/// nodes' radiance (occlusion needs none).
+/// nodes' radiance (occlusion needs none); `depths`: also the inverse
+/// depths of what the pixels show (`Scratch::inverse`, the gradients').
 #[inline(always)]
 pub(crate) fn compose(
     t: &Table,
@@ -192,6 +198,7 @@ pub(crate) fn compose(
     tree: &Tree,
     site: &Site,
     radiance: bool,
+    depths: bool,
     s: &mut Scratch,
 ) -> Vec3 {
     let (pixels, n) = (t.dir.len(), frags.len());
@@ -208,6 +215,8 @@ pub(crate) fn compose(
         cover: out_cover,
         radiance: out_radiance,
         tilted: _,
+        inverse: out_inverse,
+        drawn: out_drawn,
     } = s;
     // One shape per splat (its fragments are consecutive). With the
     // radiance, the brightest the nodes hold: their own radiance, not the
@@ -268,6 +277,12 @@ pub(crate) fn compose(
     out_cover.resize(pixels, 0.0);
     out_radiance.clear();
     out_radiance.resize(if radiance { pixels } else { 0 }, Vec3::ZERO);
+    if depths {
+        out_inverse.clear();
+        out_inverse.resize(pixels, 0.0);
+        out_drawn.clear();
+        out_drawn.resize(pixels, 0.0);
+    }
     let zero = F32s::splat(0.0);
     for p in 0..pixels {
         // A near surface met by the pixel's ray hides everything else.
@@ -275,6 +290,10 @@ pub(crate) fn compose(
             out_cover[p] = 1.0;
             if radiance {
                 out_radiance[p] = l;
+            }
+            if let (true, Some(near)) = (depths, site.near) {
+                out_inverse[p] = 1.0 / near.reach;
+                out_drawn[p] = 1.0;
             }
             continue;
         }
@@ -402,6 +421,11 @@ pub(crate) fn compose(
             }
         }
         out_cover[p] = mean(cover);
+        if depths {
+            let shown = depth.simd_lt(F32s::splat(f32::INFINITY));
+            out_inverse[p] = mean(F32s::select(shown, F32s::splat(1.0) / depth, zero));
+            out_drawn[p] = mean(F32s::select(shown, F32s::splat(1.0), zero));
+        }
         if radiance {
             out_radiance[p] = Vec3::new(mean(light[0]), mean(light[1]), mean(light[2]));
         }
@@ -438,7 +462,7 @@ pub(crate) fn irradiance(
     sky: Option<&Sky>,
     scratch: &mut Scratch,
 ) -> Vec3 {
-    let mut brightest = compose(t, frags, tree, site, true, scratch);
+    let mut brightest = compose(t, frags, tree, site, true, false, scratch);
     let weights = match site.shading {
         None => &t.cos_weight,
         Some(n) => {
@@ -510,7 +534,7 @@ pub(crate) fn occlusion(
     site: &Site,
     scratch: &mut Scratch,
 ) -> f32 {
-    compose(t, frags, tree, site, false, scratch);
+    compose(t, frags, tree, site, false, false, scratch);
     let mut o = 0.0f32;
     for (c, w) in scratch.cover.iter().zip(&t.cos_weight) {
         o += c * w;
@@ -532,7 +556,7 @@ pub(crate) fn reflected(
     sky: Option<&Sky>,
     c: &mut Scratch,
 ) -> Vec3 {
-    compose(t, frags, tree, site, true, c);
+    compose(t, frags, tree, site, true, false, c);
     let mut e = Vec3::ZERO;
     if let (Some(open), Some(sky)) = (site.open, sky) {
         return open::light_and_sky(&c.radiance, &t.cos_weight, open, sky, t, f);

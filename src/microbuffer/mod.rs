@@ -29,7 +29,8 @@
 //! fragments and the convolutions' entry points), `near` and `open` (what
 //! rays from the receiver meet: the near field, the sky), `samples` (a fragment at
 //! the pixel's sub-samples), `compose`
-//! (fragments to pixels, pixels to irradiance, occlusion or glossy), `plan`
+//! (fragments to pixels, pixels to irradiance, occlusion or glossy),
+//! `gradients` (how the irradiance changes as the receiver moves), `plan`
 //! (a splat's class and footprint), `draw` (the scalar draw), `tiles` (the
 //! 16-lane draw), `shade` (the two shading pipelines: [`shade_cuts`] and
 //! [`shade_packet`]).
@@ -38,6 +39,7 @@ mod buffer;
 mod compose;
 mod draw;
 mod fragments;
+mod gradients;
 mod locate;
 mod near;
 mod open;
@@ -48,6 +50,7 @@ mod table;
 mod tiles;
 
 pub use buffer::{MicroBuffer, MicroBufferSink};
+pub use gradients::Gradients;
 pub use near::{NEAR_RADII, Near, NearField, Sight};
 pub use shade::{Convolution, PacketCut, shade_cuts, shade_packet};
 pub(crate) use shade::{shade_cuts_near, shade_packet_near};

@@ -138,6 +138,8 @@ pub struct Near {
     pub(super) skip: Vec<NodeId>,
     /// Per pixel: the radiance its ray met (the pixel is then opaque).
     pub(super) pixels: Vec<Option<Vec3>>,
+    /// How far the rays reached: no hit lies further.
+    pub(super) reach: f32,
 }
 
 impl Near {
@@ -202,7 +204,7 @@ pub(super) fn near(
         let d = (frame[0] * l.x + frame[1] * l.y + frame[2] * l.z).normalize();
         pixels.push(field.trace(position, normal, d, reach));
     }
-    Some(Near { skip, pixels })
+    Some(Near { skip, pixels, reach })
 }
 
 #[cfg(test)]

@@ -115,6 +115,34 @@ pub(crate) struct Table {
     /// sub-samples, the centres of a 4×4 grid over the pixel's square, row
     /// by row (`samples`).
     pub(crate) sub: Vec<[[f32; LANES]; 3]>,
+    /// Per pixel, its edges with the next pixel of its row and of its
+    /// column: `∫ cosθ m ds` along the edge, `m` the unit direction across
+    /// it toward that neighbour (zero at the horizon); the gradients'
+    /// boundary terms (`gradients`).
+    pub(crate) edge: Vec<[Vec3; 2]>,
+    /// Per pixel `∫ ẑ × ω dω`: how its cosine weight turns with the normal.
+    pub(crate) turn: Vec<Vec3>,
+}
+
+/// `∫ cosθ m ds` along the map's segment from `(u0, v0)` to `(u1, v1)`,
+/// `m` the unit direction across it, on the side of `toward`.
+fn edge_integral(u0: f64, v0: f64, u1: f64, v1: f64, toward: DVec3) -> DVec3 {
+    const PIECES: usize = 16;
+    let mut g = DVec3::ZERO;
+    for k in 0..PIECES {
+        let (s0, s1) = (k as f64 / PIECES as f64, (k + 1) as f64 / PIECES as f64);
+        let a = unmap(u0 + (u1 - u0) * s0, v0 + (v1 - v0) * s0);
+        let b = unmap(u0 + (u1 - u0) * s1, v0 + (v1 - v0) * s1);
+        let mid = (a + b).normalize();
+        let chord = b - a;
+        let arc = 2.0 * (0.5 * chord.length()).min(1.0).asin();
+        let mut m = mid.cross(chord).normalize_or_zero();
+        if m.dot(toward) < 0.0 {
+            m = -m;
+        }
+        g += m * (mid.z.max(0.0) * arc);
+    }
+    g
 }
 
 /// Footprints up to this many pixels from their centre use the local reach.
@@ -187,6 +215,36 @@ impl Table {
                 sub.push(s);
             }
         }
+        let mut edge = Vec::with_capacity(len);
+        let mut turn = Vec::with_capacity(len);
+        for r in 0..n {
+            for c in 0..n {
+                let (u0, v0) = (-1.0 + c as f64 * h, -1.0 + r as f64 * h);
+                let p = r * n + c;
+                let own = dir[p].as_dvec3();
+                let right = if c + 1 < n {
+                    let toward = dir[p + 1].as_dvec3() - own;
+                    edge_integral(u0 + h, v0, u0 + h, v0 + h, toward).as_vec3()
+                } else {
+                    Vec3::ZERO
+                };
+                let down = if r + 1 < n {
+                    let toward = dir[p + n].as_dvec3() - own;
+                    edge_integral(u0, v0 + h, u0 + h, v0 + h, toward).as_vec3()
+                } else {
+                    Vec3::ZERO
+                };
+                edge.push([right, down]);
+                let [sx, sy, _] = &sub[p];
+                let w = f64::from(solid_angle[p]) / LANES as f64;
+                let (mut tx, mut ty) = (0.0f64, 0.0f64);
+                for (x, y) in sx.iter().zip(sy) {
+                    tx -= f64::from(*y) * w;
+                    ty += f64::from(*x) * w;
+                }
+                turn.push(Vec3::new(tx as f32, ty as f32, 0.0));
+            }
+        }
         Table {
             n,
             dir,
@@ -203,6 +261,8 @@ impl Table {
             lowest_z,
             lowest_sin: (1.0 - lowest_z * lowest_z).max(0.0).sqrt(),
             sub,
+            edge,
+            turn,
         }
     }
 
