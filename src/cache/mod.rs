@@ -39,7 +39,7 @@ use rayon::prelude::*;
 use crate::cut::{Receiver, TraversalStats};
 use crate::error::Error;
 use crate::gather::Gather;
-use crate::microbuffer::Convolution;
+use crate::microbuffer::{Convolution, Gradients};
 use crate::simd::LANES;
 use crate::tree::Tree;
 use grid::{Grid, Key, KeyMap, cell_of, key};
@@ -101,7 +101,7 @@ pub struct Prepared {
 pub enum CacheError {
     /// The gather refused a receiver or its options.
     Gather(Error),
-    /// A record's gather gave a value that is not finite.
+    /// A record's gather gave a value or a gradient that is not finite.
     NonFinite {
         /// The record's place.
         position: Vec3,
@@ -123,7 +123,7 @@ impl std::fmt::Display for CacheError {
             CacheError::NonFinite { position, value } => {
                 write!(
                     f,
-                    "a cache record at {position} gathered a value that is not finite ({value})"
+                    "a cache record at {position} gathered a value or gradient that is not finite (E = {value})"
                 )
             }
         }
@@ -351,9 +351,10 @@ impl Cache {
                 continue;
             }
             let w = (1.0 - d) * (1.0 - d);
-            b.sum += r.e * w;
+            let e = r.turned(n);
+            b.sum += e * w;
             b.weight += w;
-            let l = r.luminance();
+            let l = e.x + e.y + e.z;
             b.lo = b.lo.min(l);
             b.hi = b.hi.max(l);
         }
@@ -389,6 +390,7 @@ impl Cache {
         out: &mut Prepared,
     ) -> Result<(), CacheError> {
         let found: Vec<Option<(Vec3, Vec3)>> = keys.par_iter().map(|&k| self.candidate(k)).collect();
+        let tree = gather.tree();
         // Sorted keys run facing by facing, neighbours in Morton order: a
         // packet's receivers face one way and share most of their cuts.
         let asked: Vec<(Vec3, Vec3)> = found.iter().flatten().copied().collect();
@@ -405,6 +407,16 @@ impl Cache {
                     let stats = g.cut(&receivers)?;
                     let t1 = Instant::now();
                     let e = g.shade(what);
+                    let slopes: Vec<Gradients> = match what {
+                        Convolution::Irradiance => g
+                            .buffers()
+                            .iter()
+                            .take(e.len())
+                            .map(|b| b.gradients(tree))
+                            .collect(),
+                        Convolution::Occlusion => vec![Gradients::default(); e.len()],
+                    };
+                    let e: Vec<(Vec3, Gradients)> = e.into_iter().zip(slopes).collect();
                     Ok((e, stats, (t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
                 },
             )
@@ -414,11 +426,12 @@ impl Cache {
             out.stats.merge(&stats);
             out.trav += trav;
             out.shading += shading;
-            for (&(position, _), e) in chunk.iter().zip(e) {
-                if !e.is_finite() {
+            for (&(position, _), (e, g)) in chunk.iter().zip(e) {
+                let slopes = g.translation.iter().chain(&g.rotation);
+                if !e.is_finite() || !slopes.clone().all(|v| v.is_finite()) {
                     return Err(CacheError::NonFinite { position, value: e });
                 }
-                light.push(e);
+                light.push((e, g));
             }
         }
         // One light per candidate, in `found`'s order.
@@ -426,10 +439,12 @@ impl Cache {
         for (&k, f) in keys.iter().zip(&found) {
             let index = match *f {
                 Some((position, normal)) => {
+                    let (e, gradients) = light[next];
                     self.records.push(Record {
                         position,
                         normal,
-                        e: light[next],
+                        e,
+                        gradients,
                     });
                     next += 1;
                     out.records += 1;

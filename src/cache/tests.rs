@@ -66,11 +66,13 @@ fn records_of_another_surface_never_blend() {
             position: Vec3::new(0.2, 0.0, z),
             normal: Vec3::Y,
             e: Vec3::splat(1.0),
+            gradients: Default::default(),
         });
         records.push(Record {
             position: Vec3::new(0.0, 0.2, z),
             normal: Vec3::X,
             e: Vec3::splat(10.0),
+            gradients: Default::default(),
         });
     }
     let cache = filed(&tree, &records);

@@ -37,7 +37,7 @@ use glam::Vec3;
 use std::simd::prelude::*;
 
 use super::fragments::Fragments;
-use super::near::Near;
+use super::near::{Near, coplanar};
 use super::open::{self, Sky};
 use super::samples::{Facets, Packed, Pixel, SAMPLES, Shape, facets, hidden_by, lanes, wholly_behind};
 use super::table::Table;
@@ -125,6 +125,8 @@ pub(crate) struct Scratch {
     shapes: Vec<Packed>,
     /// Per shape: left out for the near field's rays.
     skipped: Vec<bool>,
+    /// Per shape, where depths are asked: on the receiver's own surface.
+    own: Vec<bool>,
     mixed: Vec<Facets>,
     /// Per fragment: its splat's shape.
     shape_of: Vec<u32>,
@@ -205,6 +207,7 @@ pub(crate) fn compose(
     let Scratch {
         shapes,
         skipped,
+        own,
         mixed,
         shape_of,
         start,
@@ -225,6 +228,7 @@ pub(crate) fn compose(
     // not follow).
     shapes.clear();
     skipped.clear();
+    own.clear();
     mixed.clear();
     shape_of.clear();
     let mut brightest = Vec3::ZERO;
@@ -245,6 +249,9 @@ pub(crate) fn compose(
             let shape = Shape::of(tree, node, site.position, &site.frame, t.n, t.half_sample, index);
             shapes.push(shape.pack());
             skipped.push(site.near.is_some_and(|n| n.skips(node)));
+            if depths {
+                own.push(coplanar(tree, node, site.position, site.frame[2]));
+            }
             last = Some(node);
         }
         shape_of.push(shapes.len() as u32 - 1);
@@ -292,6 +299,8 @@ pub(crate) fn compose(
                 out_radiance[p] = l;
             }
             if let (true, Some(near)) = (depths, site.near) {
+                // The hit lies within the rays' reach (its distance is not
+                // kept): the nearest it can be seen as is the reach.
                 out_inverse[p] = 1.0 / near.reach;
                 out_drawn[p] = 1.0;
             }
@@ -320,6 +329,9 @@ pub(crate) fn compose(
         let mut plane = [zero, zero, zero, F32s::splat(f32::NEG_INFINITY)];
         let mut body = [zero; 4];
         let mut depth = F32s::splat(f32::INFINITY);
+        // The same, without the receiver's own surface (its splats lie at
+        // the horizon a few radii away, and move with it).
+        let mut shown = depth;
         for &(_, i) in bucket.iter() {
             let k = shape_of[i as usize] as usize;
             if skipped[k] {
@@ -334,6 +346,9 @@ pub(crate) fn compose(
             let mid = (l.near + l.far) * F32s::splat(0.5);
             let closer = drawn & mid.simd_lt(depth);
             depth = F32s::select(closer, mid, depth);
+            if depths && !own[k] {
+                shown = F32s::select(drawn & mid.simd_lt(shown), mid, shown);
+            }
             for c in 0..4 {
                 plane[c] = F32s::select(closer, l.plane[c], plane[c]);
                 body[c] = F32s::select(closer, l.body[c], body[c]);
@@ -422,9 +437,9 @@ pub(crate) fn compose(
         }
         out_cover[p] = mean(cover);
         if depths {
-            let shown = depth.simd_lt(F32s::splat(f32::INFINITY));
-            out_inverse[p] = mean(F32s::select(shown, F32s::splat(1.0) / depth, zero));
-            out_drawn[p] = mean(F32s::select(shown, F32s::splat(1.0), zero));
+            let some = shown.simd_lt(F32s::splat(f32::INFINITY));
+            out_inverse[p] = mean(F32s::select(some, F32s::splat(1.0) / shown, zero));
+            out_drawn[p] = mean(F32s::select(some, F32s::splat(1.0), zero));
         }
         if radiance {
             out_radiance[p] = Vec3::new(mean(light[0]), mean(light[1]), mean(light[2]));

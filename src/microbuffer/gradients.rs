@@ -67,16 +67,30 @@ pub(super) fn gradients(
 ) -> Gradients {
     compose::compose(t, frags, tree, site, true, true, s);
     let pixels = t.dir.len();
-    // What each pixel shows, the sky through its open part included.
-    let mut light = Vec::with_capacity(pixels);
+    // What each pixel sends the receiver, the sky through its open part
+    // included (the irradiance's sum), and what it shows: the same with
+    // its splats' coverage at most one. One surface's splats overlap here
+    // and leave gaps there; the rotation follows the sum, but the
+    // differences across the edges would follow the overlaps, not the
+    // light.
+    let (mut sent, mut shown) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
     for p in 0..pixels {
         let (l, cover) = (s.radiance[p], s.cover[p]);
-        light.push(match (site.open, sky) {
-            (Some(open), Some(sky)) if open[p] >= 1.0 => sky.at(t, p),
-            (Some(open), Some(sky)) => l + sky.at(t, p) * open[p],
-            (None, Some(sky)) => l + sky.at(t, p) * (1.0 - cover).clamp(0.0, 1.0),
-            _ => l,
-        });
+        let (whole, over) = (cover.clamp(0.0, 1.0), if cover > 1.0 { l / cover } else { l });
+        let (a, b) = match (site.open, sky) {
+            (Some(open), Some(sky)) if open[p] >= 1.0 => (sky.at(t, p), sky.at(t, p)),
+            (Some(open), Some(sky)) => {
+                let s = sky.at(t, p) * open[p];
+                (l + s, over * (1.0 - open[p]) + s)
+            }
+            (None, Some(sky)) => {
+                let s = sky.at(t, p) * (1.0 - whole);
+                (l + s, over + s)
+            }
+            _ => (l, over),
+        };
+        sent.push(a);
+        shown.push(b);
     }
     // The inverse depth of what each pixel shows, where it shows anything.
     let inv: Vec<f32> = s
@@ -96,14 +110,14 @@ pub(super) fn gradients(
             }
             let i = inv[p].max(inv[q]);
             if i > 0.0 {
-                let step = (light[p] - light[q]) * i;
+                let step = (shown[p] - shown[q]) * i;
                 for c in 0..3 {
                     translation[c] -= edge * step[c];
                 }
             }
         }
         for c in 0..3 {
-            rotation[c] += t.turn[p] * light[p][c];
+            rotation[c] += t.turn[p] * sent[p][c];
         }
         let w = t.cos_weight[p];
         weight += w;
@@ -239,14 +253,15 @@ mod tests {
         }
         eprintln!("worst errors (E, distance, translation, rotation), coarse to fine: {errors:?}");
         // E and the distance are within a percent at every level; the
-        // gradients' error (the pixels' edges stand for the wall's) falls
-        // by about half as the pixels halve.
+        // rotation's error falls by about half as the pixels halve, the
+        // translation's (the pixels' edges stand for the wall's) falls
+        // toward the floor that capping each pixel's coverage at one leaves
+        // (it lowers the overlaps of the wall's disks but not their gaps).
         for e in &errors {
             assert!(e[0] < 0.01 && e[1] < 0.01, "{errors:?}");
         }
-        for k in [2, 3] {
-            assert!(errors.windows(2).all(|w| w[1][k] < 0.7 * w[0][k]), "{errors:?}");
-        }
-        assert!(errors[2][2] < 0.08 && errors[2][3] < 0.01, "{errors:?}");
+        assert!(errors.windows(2).all(|w| w[1][3] < 0.7 * w[0][3]), "{errors:?}");
+        assert!(errors.windows(2).all(|w| w[1][2] < 0.9 * w[0][2]), "{errors:?}");
+        assert!(errors[2][2] < 0.1 && errors[2][3] < 0.01, "{errors:?}");
     }
 }

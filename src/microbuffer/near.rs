@@ -160,7 +160,7 @@ impl Near {
 /// Such leaves lie at the horizon, where they show nothing; they alone never
 /// call for rays (every receiver's cut holds a few).
 #[inline(always)]
-fn coplanar(tree: &Tree, node: NodeId, position: Vec3, normal: Vec3) -> bool {
+pub(super) fn coplanar(tree: &Tree, node: NodeId, position: Vec3, normal: Vec3) -> bool {
     let (c, r) = tree.sphere(node);
     tree.mean_normal(node).dot(normal) > 0.866 && (c - position).dot(normal).abs() < 0.5 * r
 }
