@@ -2,6 +2,7 @@
 use glam::Vec3;
 
 use super::buffer::*;
+use super::compose::{at_least_zero, at_most};
 use super::locate::*;
 use super::plan::*;
 use super::table::*;
@@ -379,4 +380,17 @@ fn a_pieces_transfer_is_a_finite_number_at_any_distance() {
     // Head-on (facing 1), at 45° to the receiver's normal, at distance² 2.
     let g = transfer(m, [1.0, 0.0, 1.0], n);
     assert!((g - std::f32::consts::FRAC_1_SQRT_2 / 2.0).abs() < 1e-6, "{g}");
+}
+
+/// The bounds keep a finite value within them and let a NaN or an
+/// infinity through, for the renderer's checks to name the receiver
+/// (glam's `min`/`max` would return the bound).
+#[test]
+fn the_bounds_let_a_nan_through() {
+    let b = Vec3::splat(3.0);
+    assert_eq!(at_most(Vec3::new(1.0, 5.0, 3.0), b), Vec3::new(1.0, 3.0, 3.0));
+    assert_eq!(at_least_zero(Vec3::new(-1.0, 2.0, 0.0)), Vec3::new(0.0, 2.0, 0.0));
+    assert!(at_most(Vec3::new(f32::NAN, 1.0, 1.0), b).x.is_nan());
+    assert_eq!(at_most(Vec3::splat(f32::INFINITY), b).x, f32::INFINITY);
+    assert!(at_least_zero(Vec3::new(1.0, f32::NAN, 1.0)).y.is_nan());
 }
