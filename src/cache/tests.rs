@@ -102,6 +102,34 @@ fn records_of_another_surface_never_blend() {
     assert_eq!(cache.lookup(Vec3::new(0.3, 0.2, 1.4), Vec3::Y), Lookup::Uncovered);
 }
 
+/// A sample whose normal leans from its record's takes the record turned
+/// by its rotational gradient, `E + (n_i × n)·∇_r E`, and one with the
+/// record's own normal takes `E` itself.
+#[test]
+fn a_record_is_turned_to_the_samples_normal_by_its_rotational_gradient() {
+    let tree = corner();
+    let turn = Vec3::new(0.0, 0.0, 3.0);
+    let record = Record {
+        position: Vec3::new(1.0, 0.0, 1.0),
+        normal: Vec3::Y,
+        e: Vec3::splat(2.0),
+        gradients: Gradients {
+            translation: [Vec3::splat(100.0); 3],
+            rotation: [turn, turn * 2.0, Vec3::ZERO],
+            distance: 1.0,
+        },
+    };
+    let cache = filed(&tree, &[record]);
+    let p = record.position + Vec3::new(0.05, 0.0, 0.02);
+    let n = Vec3::new(0.1, 1.0, 0.0).normalize();
+    let want = Vec3::splat(2.0) + Vec3::new(1.0, 2.0, 0.0) * Vec3::Y.cross(n).dot(turn);
+    match cache.lookup(p, n) {
+        Lookup::Light(e) => assert!((e - want).abs().max_element() < 1e-5, "{e} against {want}"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(cache.lookup(p, Vec3::Y), Lookup::Light(Vec3::splat(2.0)));
+}
+
 /// Fewer surfels under emulation (`PBGI_QC_TESTS` below 50, as the ARM
 /// stage sets it).
 fn emulated() -> bool {
