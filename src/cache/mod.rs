@@ -427,8 +427,7 @@ impl Cache {
             out.trav += trav;
             out.shading += shading;
             for (&(position, _), (e, g)) in chunk.iter().zip(e) {
-                let slopes = g.translation.iter().chain(&g.rotation);
-                if !e.is_finite() || !slopes.clone().all(|v| v.is_finite()) {
+                if !e.is_finite() || !g.translation.iter().chain(&g.rotation).all(|v| v.is_finite()) {
                     return Err(CacheError::NonFinite { position, value: e });
                 }
                 light.push((e, g));

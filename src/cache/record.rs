@@ -60,6 +60,9 @@ impl Record {
     #[inline]
     pub fn turned(&self, n: Vec3) -> Vec3 {
         let e = self.gradients.extrapolate(self.e, Vec3::ZERO, self.normal, n);
-        e.max(Vec3::ZERO)
+        // A NaN stays NaN (glam's `max` would return the zero): a record's
+        // light and gradients are checked finite when it is made, so only
+        // a defect upstream could bring one.
+        if e.is_nan() { e } else { e.max(Vec3::ZERO) }
     }
 }

@@ -76,18 +76,18 @@ pub(super) fn gradients(
     let (mut sent, mut shown) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
     for p in 0..pixels {
         let (l, cover) = (s.radiance[p], s.cover[p]);
-        let (whole, over) = (cover.clamp(0.0, 1.0), if cover > 1.0 { l / cover } else { l });
+        let capped = if cover > 1.0 { l / cover } else { l };
         let (a, b) = match (site.open, sky) {
             (Some(open), Some(sky)) if open[p] >= 1.0 => (sky.at(t, p), sky.at(t, p)),
             (Some(open), Some(sky)) => {
                 let s = sky.at(t, p) * open[p];
-                (l + s, over * (1.0 - open[p]) + s)
+                (l + s, capped * (1.0 - open[p]) + s)
             }
             (None, Some(sky)) => {
-                let s = sky.at(t, p) * (1.0 - whole);
-                (l + s, over + s)
+                let s = sky.at(t, p) * (1.0 - cover.clamp(0.0, 1.0));
+                (l + s, capped + s)
             }
-            _ => (l, over),
+            _ => (l, capped),
         };
         sent.push(a);
         shown.push(b);
