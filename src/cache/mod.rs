@@ -390,7 +390,6 @@ impl Cache {
         out: &mut Prepared,
     ) -> Result<(), CacheError> {
         let found: Vec<Option<(Vec3, Vec3)>> = keys.par_iter().map(|&k| self.candidate(k)).collect();
-        let tree = gather.tree();
         // Sorted keys run facing by facing, neighbours in Morton order: a
         // packet's receivers face one way and share most of their cuts.
         let asked: Vec<(Vec3, Vec3)> = found.iter().flatten().copied().collect();
@@ -408,11 +407,17 @@ impl Cache {
                     let t1 = Instant::now();
                     let e = g.shade(what);
                     let slopes: Vec<Gradients> = match what {
+                        // The one gradient a lookup applies, from the
+                        // composition `shade` just made.
                         Convolution::Irradiance => g
                             .buffers()
                             .iter()
                             .take(e.len())
-                            .map(|b| b.gradients(tree))
+                            .map(|b| Gradients {
+                                rotation: b.turning(),
+                                distance: f32::INFINITY,
+                                ..Gradients::default()
+                            })
                             .collect(),
                         Convolution::Occlusion => vec![Gradients::default(); e.len()],
                     };

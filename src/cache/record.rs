@@ -41,7 +41,9 @@ pub struct Record {
     pub normal: Vec3,
     /// The gathered irradiance `E` (RGB), or occlusion in every channel.
     pub e: Vec3,
-    /// How `e` changes as the point moves and turns (zero for occlusion).
+    /// How `e` changes as the point turns: the rotational gradient, the
+    /// one a lookup applies (zero for occlusion). The translational one
+    /// and the distance are not gathered for records yet (zero, infinite).
     pub gradients: Gradients,
 }
 

@@ -288,6 +288,14 @@ impl MicroBuffer {
         )
     }
 
+    /// The rotational gradient of [`gradients`](Self::gradients), read off
+    /// the pixels the buffer's last convolution composed: valid right after
+    /// an irradiance convolution of a buffer without a tilted normal (as
+    /// the gatherer's `shade` leaves it), with no second composition.
+    pub(crate) fn turning(&self) -> [Vec3; 3] {
+        gradients::rotation(&self.table, &self.scratch, &self.site(), self.sky().as_ref())
+    }
+
     /// Glossy reflection towards `wo` (world, unit):
     /// `Σ L·f_s(ωi, ωo)·∫cosθ dω` over the composed pixels (and the
     /// environment through the open ones), `ωi` the pixel centre.

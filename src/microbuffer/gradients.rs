@@ -55,6 +55,51 @@ impl Gradients {
     }
 }
 
+/// The light pixel `p` of the composed `s` sends the receiver, the sky
+/// through its open part included (the irradiance's sum), and the light it
+/// shows: the same with its splats' coverage at most one. One surface's
+/// splats overlap here and leave gaps there; the rotation follows the sum,
+/// but the differences across the edges would follow the overlaps, not the
+/// light.
+#[inline]
+fn light(t: &Table, s: &Scratch, site: &Site, sky: Option<&Sky>, p: usize) -> (Vec3, Vec3) {
+    let (l, cover) = (s.radiance[p], s.cover[p]);
+    let capped = if cover > 1.0 { l / cover } else { l };
+    match (site.open, sky) {
+        (Some(open), Some(sky)) if open[p] >= 1.0 => (sky.at(t, p), sky.at(t, p)),
+        (Some(open), Some(sky)) => {
+            let s = sky.at(t, p) * open[p];
+            (l + s, capped * (1.0 - open[p]) + s)
+        }
+        (None, Some(sky)) => {
+            let s = sky.at(t, p) * (1.0 - cover.clamp(0.0, 1.0));
+            (l + s, capped + s)
+        }
+        _ => (l, capped),
+    }
+}
+
+/// Local to world through the receiver's frame.
+#[inline]
+fn world(site: &Site, v: Vec3) -> Vec3 {
+    site.frame[0] * v.x + site.frame[1] * v.y + site.frame[2] * v.z
+}
+
+/// The rotational gradient (per channel, world space) of the receiver
+/// `site` whose pixels `s` holds composed with their radiance: what an
+/// irradiance convolution leaves in its buffer, so the cache reads it
+/// without composing again.
+pub(super) fn rotation(t: &Table, s: &Scratch, site: &Site, sky: Option<&Sky>) -> [Vec3; 3] {
+    let mut rotation = [Vec3::ZERO; 3];
+    for p in 0..t.dir.len() {
+        let sent = light(t, s, site, sky, p).0;
+        for c in 0..3 {
+            rotation[c] += t.turn[p] * sent[c];
+        }
+    }
+    rotation.map(|v| world(site, v))
+}
+
 /// The gradients of the receiver `site` whose splats left `frags`, the
 /// environment `sky` showing through its open pixels.
 pub(super) fn gradients(
@@ -67,31 +112,7 @@ pub(super) fn gradients(
 ) -> Gradients {
     compose::compose(t, frags, tree, site, true, true, s);
     let pixels = t.dir.len();
-    // What each pixel sends the receiver, the sky through its open part
-    // included (the irradiance's sum), and what it shows: the same with
-    // its splats' coverage at most one. One surface's splats overlap here
-    // and leave gaps there; the rotation follows the sum, but the
-    // differences across the edges would follow the overlaps, not the
-    // light.
-    let (mut sent, mut shown) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
-    for p in 0..pixels {
-        let (l, cover) = (s.radiance[p], s.cover[p]);
-        let capped = if cover > 1.0 { l / cover } else { l };
-        let (a, b) = match (site.open, sky) {
-            (Some(open), Some(sky)) if open[p] >= 1.0 => (sky.at(t, p), sky.at(t, p)),
-            (Some(open), Some(sky)) => {
-                let s = sky.at(t, p) * open[p];
-                (l + s, capped * (1.0 - open[p]) + s)
-            }
-            (None, Some(sky)) => {
-                let s = sky.at(t, p) * (1.0 - cover.clamp(0.0, 1.0));
-                (l + s, capped + s)
-            }
-            _ => (l, capped),
-        };
-        sent.push(a);
-        shown.push(b);
-    }
+    let shown: Vec<Vec3> = (0..pixels).map(|p| light(t, s, site, sky, p).1).collect();
     // The inverse depth of what each pixel shows, where it shows anything.
     let inv: Vec<f32> = s
         .inverse
@@ -100,7 +121,7 @@ pub(super) fn gradients(
         .map(|(i, d)| if *d > 0.0 { i / d } else { 0.0 })
         .collect();
     let n = t.n;
-    let (mut translation, mut rotation) = ([Vec3::ZERO; 3], [Vec3::ZERO; 3]);
+    let mut translation = [Vec3::ZERO; 3];
     let (mut weight, mut inverse) = (0.0f32, 0.0f32);
     for p in 0..pixels {
         let neighbours = [(p % n + 1 < n, p + 1), (p / n + 1 < n, p + n)];
@@ -116,9 +137,6 @@ pub(super) fn gradients(
                 }
             }
         }
-        for c in 0..3 {
-            rotation[c] += t.turn[p] * sent[p][c];
-        }
         let w = t.cos_weight[p];
         weight += w;
         // As much of the pixel as its splats cover (their grown disks
@@ -127,10 +145,9 @@ pub(super) fn gradients(
         // gaps there).
         inverse += w * s.cover[p].max(0.0) * inv[p];
     }
-    let world = |v: Vec3| site.frame[0] * v.x + site.frame[1] * v.y + site.frame[2] * v.z;
     Gradients {
-        translation: translation.map(world),
-        rotation: rotation.map(world),
+        translation: translation.map(|v| world(site, v)),
+        rotation: rotation(t, s, site, sky),
         distance: if inverse > 0.0 {
             weight / inverse
         } else {
@@ -263,5 +280,31 @@ mod tests {
         assert!(errors.windows(2).all(|w| w[1][3] < 0.7 * w[0][3]), "{errors:?}");
         assert!(errors.windows(2).all(|w| w[1][2] < 0.9 * w[0][2]), "{errors:?}");
         assert!(errors[2][2] < 0.1 && errors[2][3] < 0.01, "{errors:?}");
+    }
+
+    /// The rotational gradient the cache reads off a gather's own
+    /// composition is the bits of the one a second composition gives.
+    #[test]
+    fn the_turning_read_after_a_gather_is_the_gradients_rotation() {
+        let tree = crate::Tree::build(&wall(0.02));
+        let gather = Gather::new(&tree, &GatherOptions::default()).unwrap();
+        let receivers: Vec<_> = (0..16)
+            .map(|k| {
+                let p = glam::Vec3::new(-0.5 + 0.06 * k as f32, 0.3 - 0.04 * k as f32, 0.0);
+                let n = glam::Vec3::new(0.02 * k as f32, 0.0, 1.0).normalize();
+                crate::cut::Receiver::new(p, n).unwrap()
+            })
+            .collect();
+        let mut g = gather.gatherer();
+        g.cut(&receivers).unwrap();
+        g.shade(crate::microbuffer::Convolution::Irradiance);
+        for b in g.buffers().iter().take(receivers.len()) {
+            let (read, again) = (b.turning(), b.gradients(&tree).rotation);
+            assert_eq!(
+                read.map(|v| v.to_array().map(f32::to_bits)),
+                again.map(|v| v.to_array().map(f32::to_bits))
+            );
+            assert!(read[0].length() > 0.0);
+        }
     }
 }
