@@ -3,7 +3,8 @@
 //! the same bake give the pixels of a full render from scratch, bit for bit,
 //! and a frame that sees what an earlier one saw gathers nothing new.
 
-use pbgi::render::{Crop, Frame, Gathers, RenderOptions, RenderOutput, render};
+use pbgi::cache::CacheFileError;
+use pbgi::render::{Crop, Frame, Gathers, RenderError, RenderOptions, RenderOutput, render};
 use pbgi::scene::Scene;
 use pbgi::scene::builtin::cornell_box;
 
@@ -95,4 +96,56 @@ fn a_cached_render_is_the_same_bits_cropped_on_any_threads_and_as_a_later_frame(
         full.receivers,
         first.receivers
     );
+}
+
+#[test]
+fn a_cache_file_serves_a_later_run_with_the_same_bits_and_refuses_another_render() {
+    let s = small();
+    let full = render(&s, &opts(), &|_, _| {}).expect("renders");
+    let made = Frame::prepare(&s, &opts()).unwrap();
+    let first = made.render(&|_, _| {}).unwrap();
+    assert_eq!(bits(&first), bits(&full));
+    let mut file = Vec::new();
+    let held = made.save_cache(&mut file).unwrap();
+    assert_eq!(held, made.cache_len());
+    assert!(held > 50, "{held} records prove little");
+
+    // Another run (another thread count) takes them up: same bits, no record gathered.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let later = pool.install(|| {
+        let mut f = Frame::prepare(&s, &opts()).unwrap();
+        assert_eq!(f.load_cache(file.as_slice()).unwrap(), held);
+        f.render(&|_, _| {}).unwrap()
+    });
+    assert_eq!(
+        bits(&later),
+        bits(&full),
+        "a loaded cache gives the render from scratch"
+    );
+    assert_eq!(later.records, 0, "a loaded cache gathers no record again");
+    assert!(later.receivers < full.receivers / 4);
+
+    // Another Ω, another scene, or no cache at all: refused, never a wrong image.
+    let mut omega = opts();
+    omega.cut.max_solid_angle *= 0.5;
+    let mut moved = small();
+    moved.meshes[0].positions[0].y += 0.01;
+    let refused = |scene: &Scene, o: &RenderOptions| {
+        Frame::prepare(scene, o)
+            .unwrap()
+            .load_cache(file.as_slice())
+            .expect_err("refused")
+    };
+    // A moved surface changes the tree; Ω, what its gathers saw.
+    for (scene, o, what) in [(&s, &omega, "settings"), (&moved, &opts(), "tree")] {
+        match refused(scene, o) {
+            RenderError::CacheFile(CacheFileError::Mismatch { what: w, .. }) if w == what => {}
+            e => panic!("{what}: {e}"),
+        }
+    }
+    let sparse = RenderOptions {
+        gathers: Gathers::default(),
+        ..opts()
+    };
+    assert!(matches!(refused(&s, &sparse), RenderError::Check(_)));
 }

@@ -24,8 +24,10 @@ pub(super) type Key = u64;
 /// The cube, and how deep its cells go.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Grid {
-    origin: Vec3,
-    size: f32,
+    /// The cube's lowest corner.
+    pub origin: Vec3,
+    /// Its side.
+    pub size: f32,
     /// Levels `0..levels`.
     pub levels: u32,
 }

@@ -28,6 +28,7 @@
 //! that must look finer go on to the next level. A later frame gathers
 //! only the cells no earlier one needed.
 
+pub mod file;
 mod grid;
 pub(crate) mod record;
 
@@ -42,6 +43,8 @@ use crate::gather::Gather;
 use crate::microbuffer::{Convolution, Gradients};
 use crate::simd::LANES;
 use crate::tree::Tree;
+use crate::tree::file::Fnv1a;
+pub use file::CacheFileError;
 use grid::{Grid, Key, KeyMap, cell_of, key};
 pub use record::Record;
 
@@ -135,6 +138,9 @@ impl std::error::Error for CacheError {}
 /// The records gathered so far over one tree, and where each may serve.
 pub struct Cache {
     grid: Grid,
+    /// A hash of the leaves the records are gathered over (their places,
+    /// sizes and light): a cache file names the tree it belongs to.
+    tree_hash: u64,
     threshold: f32,
     slack: f32,
     /// The leaves, sorted by their finest Morton code: code, position,
@@ -177,9 +183,18 @@ impl Cache {
     /// An empty cache over the surfels of `tree`.
     pub fn new(tree: &Tree, opts: CacheOptions) -> Self {
         let mut leaves: Vec<(Vec3, Vec3, f32)> = Vec::new();
+        let mut hash = Fnv1a::default();
         for k in 0..tree.len() as u32 {
             if tree.is_leaf(k) {
                 let v = tree.node(k);
+                let light = tree.radiance(k);
+                for x in [v.centroid, v.normal, light]
+                    .iter()
+                    .flat_map(|v| v.to_array())
+                    .chain([v.radius])
+                {
+                    hash.write(&x.to_bits().to_le_bytes());
+                }
                 leaves.push((v.centroid, v.normal.normalize_or(Vec3::Z), v.radius));
             }
         }
@@ -210,6 +225,7 @@ impl Cache {
         coded.sort_unstable();
         Cache {
             grid,
+            tree_hash: hash.0,
             threshold: opts.threshold,
             slack: SAME_PLANE * 2.0 * radius,
             codes: coded.iter().map(|c| c.0).collect(),

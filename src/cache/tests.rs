@@ -241,3 +241,90 @@ fn the_cache_converges_to_the_gathers_as_its_threshold_shrinks() {
     assert!(mid.0 < 0.05, "{mid:?}");
     assert!(coarse.1 < mid.1 && mid.1 < fine.1);
 }
+
+/// `bytes` with its checksum made right again: damage the checksum does
+/// not see, as a writer with a defect would leave it.
+fn sealed(mut bytes: Vec<u8>) -> Vec<u8> {
+    let end = bytes.len() - 8;
+    let sum = crate::tree::file::checksum(&bytes[..end]);
+    bytes[end..].copy_from_slice(&sum.to_le_bytes());
+    bytes
+}
+
+#[test]
+fn a_cache_file_gives_back_its_records_and_refuses_a_damaged_or_foreign_one() {
+    use file::CacheFileError as E;
+    let (tree, points) = scene(3_000);
+    let gather = Gather::new(&tree, &options(2)).unwrap();
+    let opts = CacheOptions::default();
+    let mut cache = Cache::new(&tree, opts);
+    cache.prepare(&points, &gather, Convolution::Irradiance).unwrap();
+    let bytes = cache.to_bytes(7);
+    let back = Cache::from_bytes(&bytes, &tree, opts, 7).unwrap();
+    assert!(back.len() > 100, "{} records prove little", back.len());
+    assert_eq!(back.len(), cache.len());
+    assert_eq!(bits(&back, &points), bits(&cache, &points));
+    assert_eq!(back.to_bytes(7), bytes, "the bytes depend on the records alone");
+    // Taken up, it gathers nothing more for the same points.
+    let mut again = back;
+    assert_eq!(
+        again
+            .prepare(&points, &gather, Convolution::Irradiance)
+            .unwrap()
+            .records,
+        0
+    );
+
+    let load = |b: &[u8]| Cache::from_bytes(b, &tree, opts, 7).err().expect("refused");
+    for n in (0..bytes.len()).step_by(97).chain([7, 55, bytes.len() - 1]) {
+        assert!(matches!(load(&bytes[..n]), E::Truncated { .. }), "cut at {n}");
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(matches!(load(&longer), E::TrailingBytes { .. }));
+    let mut flipped = bytes.clone();
+    flipped[100] ^= 4;
+    assert!(matches!(load(&flipped), E::Checksum { .. }));
+    assert!(matches!(load(b"PBGITREE...."), E::BadMagic { .. }));
+    assert!(matches!(
+        Cache::from_bytes(&bytes, &tree, opts, 8),
+        Err(E::Mismatch { what: "settings", .. })
+    ));
+    // A surface moved by a hundredth: a record of the old tree is stale.
+    let cloud = crate::synthetic::box_with_blocks(3_000, 7);
+    let moved: Vec<Surfel> = cloud
+        .surfels()
+        .iter()
+        .map(|s| Surfel {
+            position: s.position + Vec3::new(0.0, if s.normal.y > 0.9 { 0.01 } else { 0.0 }, 0.0),
+            ..*s
+        })
+        .collect();
+    let other = Tree::build(&PointCloud::new(moved).unwrap());
+    assert!(matches!(
+        Cache::from_bytes(&bytes, &other, opts, 7),
+        Err(E::Mismatch { what: "tree", .. })
+    ));
+
+    // Damage behind a good checksum, each at the first record (byte 56).
+    let invalid = |edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = bytes.clone();
+        edit(&mut b);
+        match load(&sealed(b)) {
+            E::Invalid { offset, .. } => offset,
+            e => panic!("{e}"),
+        }
+    };
+    let put = |b: &mut Vec<u8>, at: usize, x: f32| b[at..at + 4].copy_from_slice(&x.to_le_bytes());
+    assert_eq!(invalid(&|b| put(b, 56 + 8, 0.123)), 56, "a record off its surfel");
+    assert_eq!(invalid(&|b| put(b, 56 + 32, f32::NAN)), 56, "a NaN light");
+    assert_eq!(invalid(&|b| put(b, 56 + 32, -1.0)), 56, "a negative light");
+    assert_eq!(
+        invalid(&|b| put(b, 56 + 44, f32::INFINITY)),
+        56,
+        "an infinite gradient"
+    );
+    assert_eq!(invalid(&|b| b[56 + 7] = 0xF0), 56, "a level past the cube's");
+    // The second record's key moved before the first's.
+    assert_eq!(invalid(&|b| b.copy_within(56..64, 176)), 176, "keys out of order");
+}

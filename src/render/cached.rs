@@ -5,16 +5,21 @@
 //! (`crate::cache`). The records depend on the scene alone, so a crop, a
 //! thread count or a later frame keeps the bits of a render from scratch.
 
+use std::io::{Read, Write};
+
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::baked::bake_record;
 use super::frame::{Frame, Timers};
 use super::options::Gathers;
 use super::output::RenderError;
 use super::sparse::{Lattice, Served};
-use crate::cache::{Cache, CacheError, CacheOptions, Lookup};
+use crate::cache::{Cache, CacheError, CacheFileError, CacheOptions, Lookup};
 use crate::cut::TraversalStats;
 use crate::gather::Gather;
+use crate::microbuffer::Convolution;
+use crate::tree::file::Fnv1a;
 
 /// Where a frame's camera samples take their indirect light from, when
 /// they do not gather it themselves.
@@ -49,6 +54,88 @@ pub(crate) struct CacheGathers {
 }
 
 impl Frame<'_> {
+    /// A hash of what this frame's records depend on beyond its tree: how
+    /// the surfels were made (the bake record: the scene, its lights and
+    /// environment, the seed, the density, the bounces), Ω, the
+    /// microbuffer, the near field and the convolution. A cache file
+    /// carries it, and [`load_cache`](Self::load_cache) refuses another.
+    pub fn cache_settings(&self) -> u64 {
+        let b = bake_record(self.scene, &self.opts);
+        let mut h = Fnv1a::default();
+        for x in [b.scene, b.seed] {
+            h.write(&x.to_le_bytes());
+        }
+        let ao = matches!(self.convolution(), Convolution::Occlusion);
+        for x in [
+            b.density.to_bits(),
+            b.light_samples,
+            b.bounces,
+            u32::from(b.ao)
+                | u32::from(b.gathered) << 1
+                | u32::from(self.near_field()) << 2
+                | u32::from(ao) << 3,
+            b.max_solid_angle.to_bits(),
+            b.microbuffer,
+            self.opts.cut.max_solid_angle.to_bits(),
+            self.opts.microbuffer as u32,
+        ] {
+            h.write(&x.to_le_bytes());
+        }
+        h.0
+    }
+
+    /// Takes up the records of a cache file ([`save_cache`](Self::save_cache),
+    /// this scene and settings, any earlier run or machine) in place of
+    /// those gathered so far, and says how many it holds. Frames then
+    /// gather only the records it lacks; the image keeps the bits of a
+    /// render from scratch. Errors: the render does not gather through the
+    /// cache, or the file is unreadable, damaged or made for another tree
+    /// or settings ([`RenderError::CacheFile`]).
+    pub fn load_cache(&mut self, r: impl Read) -> Result<usize, RenderError> {
+        let threshold = self.cache_threshold()?;
+        let c = Cache::load(r, &self.tree, CacheOptions { threshold }, self.cache_settings())?;
+        let n = c.len();
+        *self
+            .cache
+            .get_mut()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(c);
+        Ok(n)
+    }
+
+    /// Writes the records gathered so far (with those loaded) as a cache
+    /// file, and says how many. Errors: the render does not gather through
+    /// the cache, or writing failed.
+    pub fn save_cache(&self, w: impl Write) -> Result<usize, RenderError> {
+        let threshold = self.cache_threshold()?;
+        let mut held = self
+            .cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let c = held.get_or_insert_with(|| Cache::new(&self.tree, CacheOptions { threshold }));
+        c.save(w, self.cache_settings())
+            .map_err(|e| RenderError::CacheFile(CacheFileError::Io(e)))?;
+        Ok(c.len())
+    }
+
+    /// Records the cache holds (gathered or loaded); 0 without one.
+    pub fn cache_len(&self) -> usize {
+        self.cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .as_ref()
+            .map_or(0, Cache::len)
+    }
+
+    /// The cache's threshold, or why this render has no cache.
+    fn cache_threshold(&self) -> Result<f32, RenderError> {
+        match self.opts.gathers {
+            Gathers::Cache { threshold } => Ok(threshold),
+            g => Err(RenderError::Check(format!(
+                "a cache file serves a render that gathers through the cache (--gathers cache), not one whose gathers are {g}"
+            ))),
+        }
+    }
+
     /// Where samples take their light from: the lattice, else the cache.
     pub(crate) fn shared<'a>(lattice: Option<&'a Lattice>, cache: Option<&'a Cache>) -> Option<Shared<'a>> {
         match (lattice, cache) {

@@ -91,7 +91,7 @@ pub struct Frame<'s> {
     environment: Option<Arc<Environment>>,
     /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
-    cache: Mutex<Option<Cache>>,
+    pub(crate) cache: Mutex<Option<Cache>>,
 }
 
 impl<'s> Frame<'s> {

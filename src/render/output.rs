@@ -3,6 +3,7 @@
 
 use super::image::Image;
 use super::options::CropError;
+use crate::cache::CacheFileError;
 use crate::cut::{Scheme, SchemeChoice, TraversalStats};
 use crate::error::Error;
 use crate::scene::SceneError;
@@ -114,6 +115,9 @@ pub enum RenderError {
         /// Its value in this render.
         render: String,
     },
+    /// A cache file could not be read or written, or belongs to another
+    /// tree or other settings.
+    CacheFile(CacheFileError),
 }
 
 impl std::fmt::Display for RenderError {
@@ -126,6 +130,7 @@ impl std::fmt::Display for RenderError {
                 write!(f, "{stage}: a value that is not finite ({value:?}) at {place}")
             }
             RenderError::Crop(e) => e.fmt(f),
+            RenderError::CacheFile(e) => e.fmt(f),
             RenderError::TreeMismatch {
                 setting,
                 baked,
@@ -144,6 +149,12 @@ impl std::error::Error for RenderError {}
 impl From<Error> for RenderError {
     fn from(e: Error) -> Self {
         RenderError::Kernel(e)
+    }
+}
+
+impl From<CacheFileError> for RenderError {
+    fn from(e: CacheFileError) -> Self {
+        RenderError::CacheFile(e)
     }
 }
 

@@ -25,8 +25,8 @@
 use std::fmt;
 use std::io::{Read, Write};
 
-use glam::Vec3;
-
+pub use super::bytes::{Fnv1a, checksum};
+use super::bytes::{Reader, put_f32, put_u32, put_u64};
 use super::check::{self, Place};
 use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree, field};
 use crate::points::{PointCloud, Surfel};
@@ -193,32 +193,6 @@ impl std::error::Error for TreeFileError {
         match self {
             TreeFileError::Io(e) => Some(e),
             _ => None,
-        }
-    }
-}
-
-/// The format's checksum: FNV-1a, 64 bits.
-pub fn checksum(bytes: &[u8]) -> u64 {
-    let mut h = Fnv1a::default();
-    h.write(bytes);
-    h.0
-}
-
-/// FNV-1a, 64 bits, fed piece by piece (the checksum; the renderer's scene hash).
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv1a(pub u64);
-
-impl Default for Fnv1a {
-    fn default() -> Self {
-        Fnv1a(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv1a {
-    /// Adds `bytes`.
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
     }
 }
@@ -523,44 +497,4 @@ fn file_len(header: &[u8]) -> u64 {
     // At most 2^32 · 184 bytes: no overflow in u64.
     (HEADER + CHECKSUM) as u64 + (SURFEL + 2 * NODE) as u64 * n - if n > 0 { NODE as u64 } else { 0 }
         + CLUSTER as u64 * clusters
-}
-
-/// Reads little-endian fields; the caller has checked the length.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> [u8; N] {
-        let b = self.bytes[self.at..self.at + N]
-            .try_into()
-            .expect("length checked");
-        self.at += N;
-        b
-    }
-    fn u32(&mut self) -> u32 {
-        u32::from_le_bytes(self.take())
-    }
-    fn u64(&mut self) -> u64 {
-        u64::from_le_bytes(self.take())
-    }
-    fn f32(&mut self) -> f32 {
-        f32::from_le_bytes(self.take())
-    }
-    fn vec3(&mut self) -> Vec3 {
-        Vec3::new(self.f32(), self.f32(), self.f32())
-    }
-}
-
-fn put_u32(out: &mut Vec<u8>, v: u32) {
-    out.extend_from_slice(&v.to_le_bytes());
-}
-
-fn put_u64(out: &mut Vec<u8>, v: u64) {
-    out.extend_from_slice(&v.to_le_bytes());
-}
-
-fn put_f32(out: &mut Vec<u8>, v: f32) {
-    out.extend_from_slice(&v.to_le_bytes());
 }

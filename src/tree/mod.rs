@@ -22,6 +22,7 @@ use crate::points::PointCloud;
 
 mod bound;
 mod build;
+pub(crate) mod bytes;
 pub(crate) use bound::FacetPlanes;
 mod check;
 pub mod file;

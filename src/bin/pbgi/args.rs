@@ -365,6 +365,17 @@ pub struct RenderArgs {
     /// Surfels and tree from this file (`pbgi bake`) instead of building them.
     #[arg(long, value_name = "FILE")]
     pub tree: Option<PathBuf>,
+    /// With `--gathers cache`: take up the cache's records from this file
+    /// where it exists (made by an earlier render of this scene with these
+    /// settings), and write them back, with those this render gathered,
+    /// when it ends.
+    #[arg(long, value_name = "FILE")]
+    pub cache: Option<PathBuf>,
+    /// Read the `--cache` file, which must exist, and leave it as it is
+    /// (the frames of a farm reading one cache made beforehand): records it
+    /// lacks are gathered for this run alone, and the summary counts them.
+    #[arg(long, requires = "cache")]
+    pub frozen_cache: bool,
     /// Render every frame of a camera path from one bake (the surfels, their
     /// light and the tree built once, or read with --tree): a JSON file
     /// `{"frames": [{"origin": [x,y,z], "target": [x,y,z], "up": [x,y,z],

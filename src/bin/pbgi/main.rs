@@ -5,6 +5,7 @@
 
 mod args;
 mod bake;
+mod cache;
 mod exit;
 mod flicker;
 mod overrides;
@@ -159,14 +160,22 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         })?),
     });
     stages.finish();
-    let frame = frame.map_err(|e| e as Box<dyn std::error::Error>)?;
+    let mut frame = frame.map_err(|e| e as Box<dyn std::error::Error>)?;
+    let cache = match &a.cache {
+        Some(path) => Some(cache::CacheFile::open(path, a.frozen_cache, &opts, &mut frame)?),
+        None => None,
+    };
     if let Some(file) = &a.camera_path {
-        return path::render_path(&scene, &opts, frame, file, &out_path, &pool);
+        path::render_path(&scene, &opts, &mut frame, file, &out_path, &pool)?;
+        return cache.map_or(Ok(()), |c| c.close(&frame));
     }
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
     let out = pool.install(|| frame.render(&|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
     write_image(&out.image, &out_path)?;
+    if let Some(c) = &cache {
+        c.close(&frame)?;
+    }
     print_summary(&scene, &opts, &out, pool.current_num_threads());
     won.print();
     println!("scene read in {read:.3} s (before the render's total)");

@@ -44,7 +44,7 @@ pub fn pattern(output: Option<&Path>, scene: &str) -> Res<PathBuf> {
 pub fn render_path(
     scene: &Scene,
     opts: &RenderOptions,
-    mut frame: Frame<'_>,
+    frame: &mut Frame<'_>,
     file: &Path,
     pattern: &Path,
     pool: &rayon::ThreadPool,
