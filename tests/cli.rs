@@ -319,3 +319,75 @@ fn each_class_of_error_has_its_exit_status() {
         assert!(!stderr.contains("panicked"), "pbgi {}: {stderr}", args.join(" "));
     }
 }
+
+#[test]
+fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
+    let dir = scratch("cache");
+    let file = dir.join("box.cache");
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args([
+                "render",
+                "--spp",
+                "1",
+                "--resolution",
+                "64x64",
+                "--surfels",
+                "4000",
+            ])
+            .args(["--gathers", "cache", "-o"])
+            .arg(dir.join("box.exr"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+        (out.status.code(), text)
+    };
+    let digest = |text: &str| {
+        let line = text.lines().find(|l| l.contains("image digest"));
+        line.unwrap_or_else(|| panic!("{text}"))
+            .rsplit(' ')
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let path = file.to_str().unwrap();
+    let (code, made) = run(&["--cache", path]);
+    assert_eq!(code, Some(0), "{made}");
+    assert!(made.contains("cache: wrote"), "{made}");
+    let bytes = std::fs::read(&file).unwrap();
+    let (code, again) = run(&["--cache", path, "--frozen-cache"]);
+    assert_eq!(code, Some(0), "{again}");
+    assert!(again.contains("records read from"), "{again}");
+    assert!(
+        again.contains("cache: 0 records gathered that the frozen"),
+        "{again}"
+    );
+    assert_eq!(
+        digest(&again),
+        digest(&made),
+        "the cache's records give the same bits"
+    );
+    // A wider view needs records the file lacks: gathered, and not written.
+    let (code, wider) = run(&["--cache", path, "--frozen-cache", "--fov", "60"]);
+    assert_eq!(code, Some(0), "{wider}");
+    assert!(!wider.contains("cache: 0 records gathered"), "{wider}");
+    assert_eq!(
+        std::fs::read(&file).unwrap(),
+        bytes,
+        "a frozen cache is not written"
+    );
+
+    // Another Ω: the file's records are refused by name, and no image made.
+    let (code, other) = run(&["--cache", path, "--max-solid-angle", "0.05"]);
+    assert_eq!(code, Some(3), "{other}");
+    assert!(
+        other.contains("box.cache") && other.contains("settings"),
+        "{other}"
+    );
+    let missing = dir.join("missing.cache");
+    let (code, text) = run(&["--cache", missing.to_str().unwrap(), "--frozen-cache"]);
+    assert_eq!(code, Some(3), "a frozen cache must exist: {text}");
+    let (code, text) = run(&["--cache", path, "--gathers", "sparse"]);
+    assert_eq!(code, Some(2), "a cache file serves --gathers cache alone: {text}");
+}

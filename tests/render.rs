@@ -560,3 +560,34 @@ fn bench_times_every_scheme_on_the_scalar_cuts() {
         assert!(rows[0].lane_utilization.is_none() && rows[2].lane_utilization.is_some());
     }
 }
+
+/// `pbgi bench --receivers records`: the schemes cut the world-space
+/// cache's records, every one a render of the frame gathers, each once.
+#[test]
+fn bench_times_every_scheme_on_the_cache_records() {
+    use pbgi::report::{BenchOptions, BenchReceivers, bench};
+    let scene = small(cornell_box());
+    let render_opts = RenderOptions {
+        density: 300.0,
+        gathers: Gathers::Cache { threshold: 0.1 },
+        ..BenchOptions::default().render
+    };
+    let made = render(&scene, &render_opts, &|_, _| {}).unwrap();
+    let opts = BenchOptions {
+        render: render_opts,
+        receivers: BenchReceivers::Records,
+        ..BenchOptions::default()
+    };
+    let rows = bench(&scene, &opts, &|_, _| {}).expect("every scheme gives the scalar cuts");
+    assert!(made.records > 50, "{} records prove little", made.records);
+    for r in &rows {
+        assert_eq!(r.kind, BenchReceivers::Records);
+        assert_eq!(
+            r.receivers, made.records,
+            "{}: the render's records, each once",
+            r.scheme
+        );
+        assert_eq!(r.nodes_per_receiver, rows[0].nodes_per_receiver, "{}", r.scheme);
+        assert!(r.to_json().contains("\"receiver_kind\":\"records\""));
+    }
+}

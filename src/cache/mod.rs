@@ -253,6 +253,33 @@ impl Cache {
         &self.records
     }
 
+    /// The records' receivers in the packets a render from scratch gathers
+    /// them in: level by level, each level's cells in key order (facing,
+    /// then Morton order), 16 to a packet. For timing the schemes on the
+    /// receivers the cache gathers.
+    pub fn packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
+        let mut held: Vec<(Key, u32)> = self
+            .cells
+            .iter()
+            .filter(|e| *e.1 != NONE)
+            .map(|(&k, &i)| (k, i))
+            .collect();
+        held.sort_unstable();
+        let mut out = Vec::new();
+        for level in held.chunk_by(|a, b| cell_of(a.0).1 == cell_of(b.0).1) {
+            for chunk in level.chunks(LANES) {
+                let at = |i: u32| &self.records[i as usize];
+                out.push(
+                    chunk
+                        .iter()
+                        .map(|&(_, i)| (at(i).position, at(i).normal))
+                        .collect(),
+                );
+            }
+        }
+        out
+    }
+
     /// Levels of cells.
     pub fn levels(&self) -> u32 {
         self.grid.levels

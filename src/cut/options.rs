@@ -51,7 +51,8 @@ pub const AUTO_SINGLE_BELOW: usize = 6;
 /// The scheme the `auto` choice runs on one packet of `receivers` receivers:
 /// [`Scheme::Packet`], the fastest on every scene measured (BENCHMARKS.md,
 /// the glossy and bump ones included, where hybrid's switching cost more than
-/// it saved), and [`Scheme::Single`] for packets too sparse to fill lanes
+/// it saved; and on the world-space cache's records, whose packets keep
+/// about half their lanes busy, `docs/lab/cache.md`), and [`Scheme::Single`] for packets too sparse to fill lanes
 /// (tiles at the image's edge or at silhouettes against the background).
 /// Every scheme gives the same cut, so the choice changes only the time.
 pub fn auto_scheme(receivers: usize) -> Scheme {

@@ -126,6 +126,16 @@ impl Frame<'_> {
             .map_or(0, Cache::len)
     }
 
+    /// The cache's records' receivers in the packets a render from scratch
+    /// gathers them in ([`Cache::packets`]); none without a cache.
+    pub(crate) fn cache_packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
+        self.cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .as_ref()
+            .map_or_else(Vec::new, Cache::packets)
+    }
+
     /// The cache's threshold, or why this render has no cache.
     fn cache_threshold(&self) -> Result<f32, RenderError> {
         match self.opts.gathers {

@@ -6,15 +6,20 @@
 //! 4×4-pixel packets, as [`render`](crate::render::render) forms them), and
 //! the cuts are checked against the scalar reference's with an
 //! order-independent checksum: a scheme that cut differently fails the
-//! benchmark instead of reporting a speed-up.
+//! benchmark instead of reporting a speed-up. With
+//! [`BenchReceivers::Records`] the receivers are instead the world-space
+//! cache's records, in the packets a render from scratch gathers them in:
+//! fewer, and less coherent than a 4×4 block of pixels.
 
 use std::simd::{Select, prelude::*};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cut::{CutSink, Scheme, SchemeChoice, Traversal, TraversalStats};
-use crate::render::{Frame, PacketPoint, RenderError, RenderOptions};
+use crate::cache::CacheOptions;
+use crate::cut::{CutSink, Receiver, Scheme, SchemeChoice, Traversal, TraversalStats};
+use crate::microbuffer::Convolution;
+use crate::render::{Frame, Gathers, PacketPoint, RenderError, RenderOptions};
 use crate::rng::mix;
 use crate::scene::Scene;
 use crate::simd::{Isa, LANES};
@@ -31,6 +36,31 @@ pub struct BenchOptions {
     pub schemes: Vec<SchemeChoice>,
     /// Rounds over the schemes; each figure is the fastest of its rounds.
     pub rounds: u32,
+    /// Whose receivers are cut.
+    pub receivers: BenchReceivers,
+}
+
+/// Whose receivers a bench cuts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BenchReceivers {
+    /// The camera's primary hits, one 4×4-pixel packet per tile and camera
+    /// sample: what the dense render and the screen lattice gather.
+    #[default]
+    Camera,
+    /// The records of the world-space cache (`Gathers::Cache`, at the
+    /// render's threshold, else the cache's default), 16 neighbours of one
+    /// facing to a packet: a render of the frame makes them first, untimed.
+    Records,
+}
+
+impl BenchReceivers {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            BenchReceivers::Camera => "camera",
+            BenchReceivers::Records => "records",
+        }
+    }
 }
 
 impl Default for BenchOptions {
@@ -46,6 +76,7 @@ impl Default for BenchOptions {
                 .chain([SchemeChoice::Auto])
                 .collect(),
             rounds: 1,
+            receivers: BenchReceivers::Camera,
         }
     }
 }
@@ -65,7 +96,9 @@ pub struct BenchRow {
     pub surfels: usize,
     /// Tree bytes per surfel.
     pub bytes_per_surfel: f64,
-    /// Receivers (camera hits) cut.
+    /// Whose receivers were cut.
+    pub kind: BenchReceivers,
+    /// Receivers cut.
     pub receivers: usize,
     /// Seconds for surfels (with their direct light) and tree.
     pub pre_s: f64,
@@ -100,7 +133,7 @@ impl BenchRow {
         format!(
             concat!(
                 "{{\"scene\":\"{}\",\"scheme\":\"{}\",\"isa\":\"{}\",\"threads\":{},",
-                "\"surfels\":{},\"bytes_per_surfel\":{:.1},\"receivers\":{},",
+                "\"surfels\":{},\"bytes_per_surfel\":{:.1},\"receiver_kind\":\"{}\",\"receivers\":{},",
                 "\"pre_s\":{:.6},\"trav_s\":{:.6},\"shading_s\":{:.6},\"others_s\":{:.6},\"frame_s\":{:.6},",
                 "\"speedup_vs_scalar\":{:.4},\"lane_utilization\":{},",
                 "\"nodes_per_receiver\":{:.1},\"splats_per_receiver\":{:.1}}}"
@@ -111,6 +144,7 @@ impl BenchRow {
             self.threads,
             self.surfels,
             self.bytes_per_surfel,
+            self.kind.name(),
             self.receivers,
             self.pre_s,
             self.trav_s,
@@ -196,7 +230,9 @@ impl CutSink for CutDigest {
 
 /// One packet of receivers, ready to cut and shade.
 struct Packet {
-    points: Vec<PacketPoint>,
+    /// The camera hits, shaded as the renderer shades them; `None` for
+    /// records, whose light is the irradiance.
+    points: Option<Vec<PacketPoint>>,
     receivers: Vec<crate::cut::Receiver>,
     /// Index of the packet's first receiver in the frame.
     first: usize,
@@ -217,29 +253,55 @@ pub fn bench(
     progress(0, passes);
     let mut done = 0;
 
-    let frame = Frame::prepare(scene, &opts.render)?;
+    let mut render = opts.render;
+    if opts.receivers == BenchReceivers::Records && !matches!(render.gathers, Gathers::Cache { .. }) {
+        render.gathers = Gathers::Cache {
+            threshold: CacheOptions::default().threshold,
+        };
+    }
+    let frame = Frame::prepare(scene, &render)?;
     let traversal = Traversal::new(frame.tree(), frame.opts.cut)?;
     let threads = rayon::current_num_threads();
 
-    // The receivers: every camera sample of every tile, one packet each.
-    let mut packets: Vec<Packet> = (0..frame.tiles())
-        .into_par_iter()
-        .flat_map_iter(|tile| {
-            let pixels = frame.tile_pixels(tile);
-            (0..frame.opts.spp)
-                .map(|s| frame.packet(&pixels, s, None))
-                .filter(|p| !p.is_empty())
-                .collect::<Vec<_>>()
-        })
-        .map(|points| {
-            let receivers = Frame::receivers(&points)?;
-            Ok(Packet {
-                points,
-                receivers,
-                first: 0,
+    let mut packets: Vec<Packet> = match opts.receivers {
+        // Every camera sample of every tile, one packet each.
+        BenchReceivers::Camera => (0..frame.tiles())
+            .into_par_iter()
+            .flat_map_iter(|tile| {
+                let pixels = frame.tile_pixels(tile);
+                (0..frame.opts.spp)
+                    .map(|s| frame.packet(&pixels, s, None))
+                    .filter(|p| !p.is_empty())
+                    .collect::<Vec<_>>()
             })
-        })
-        .collect::<Result<_, crate::Error>>()?;
+            .map(|points| {
+                let receivers = Frame::receivers(&points)?;
+                Ok(Packet {
+                    points: Some(points),
+                    receivers,
+                    first: 0,
+                })
+            })
+            .collect::<Result<_, crate::Error>>()?,
+        BenchReceivers::Records => {
+            frame.render(&|_, _| {})?;
+            frame
+                .cache_packets()
+                .into_iter()
+                .map(|chunk| {
+                    let receivers = chunk
+                        .iter()
+                        .map(|&(p, n)| Receiver::new(p, n))
+                        .collect::<Result<_, _>>()?;
+                    Ok(Packet {
+                        points: None,
+                        receivers,
+                        first: 0,
+                    })
+                })
+                .collect::<Result<_, crate::Error>>()?
+        }
+    };
     let mut first = 0;
     for p in &mut packets {
         p.first = first;
@@ -307,10 +369,16 @@ pub fn bench(
                     || gather.gatherer(),
                     |g, p| {
                         g.cut(&p.receivers).expect("a packet of at most 16");
-                        let points: Vec<_> = p.points.iter().collect();
                         let t0 = Instant::now();
-                        let l = frame.shade(&points, g);
-                        std::hint::black_box(l);
+                        match &p.points {
+                            Some(points) => {
+                                let points: Vec<_> = points.iter().collect();
+                                std::hint::black_box(frame.shade(&points, g));
+                            }
+                            None => {
+                                std::hint::black_box(g.shade(Convolution::Irradiance));
+                            }
+                        }
                         t0.elapsed().as_nanos() as u64
                     },
                 )
@@ -334,6 +402,7 @@ pub fn bench(
                 threads,
                 surfels: frame.surfels,
                 bytes_per_surfel: tree.bytes_per_surfel(),
+                kind: opts.receivers,
                 receivers,
                 pre_s: frame.pre_seconds(),
                 trav_s: best[i],

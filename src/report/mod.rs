@@ -26,7 +26,7 @@ pub mod plot;
 pub mod scale;
 mod sweep;
 
-pub use bench::{BenchOptions, BenchRow, bench};
+pub use bench::{BenchOptions, BenchReceivers, BenchRow, bench};
 pub use compare::{
     Comparison, compare, emitter_mask, error_image, mean_reference, relative_rmse, side_by_side,
 };

@@ -63,6 +63,12 @@ pub struct BenchArgs {
     /// Camera samples per pixel (each a receiver).
     #[arg(long, default_value_t = 1, value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
     pub spp: u32,
+    /// Whose receivers are cut: `camera` (the primary hits, 4×4-pixel
+    /// packets) or `records` (the world-space cache's records of a
+    /// `--gathers cache` render of the frame, made first, in the packets it
+    /// gathers them in).
+    #[arg(long, default_value = "camera", value_parser = ["camera", "records"])]
+    pub receivers: String,
     /// The scale benchmark instead: each part's time and the peak memory of
     /// a default render of the meshes given as SCENES (default: the three
     /// fetched dragons, scripts/fetch-scenes.sh), of `--copies` copies of

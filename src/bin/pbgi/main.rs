@@ -27,7 +27,7 @@ use pbgi::SchemeChoice;
 use pbgi::render::{
     Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render_reference,
 };
-use pbgi::report::{BenchOptions, BenchRow, bench};
+use pbgi::report::{BenchOptions, BenchReceivers, BenchRow, bench};
 use pbgi::scene::resolve;
 use progress::{StageBars, progress_bar, tick};
 
@@ -486,6 +486,10 @@ fn cmd_bench(a: &BenchArgs) -> Res<()> {
         render: a.settings.options(a.spp)?,
         schemes: parse_choices(&a.schemes)?,
         rounds: a.rounds,
+        receivers: match a.receivers.as_str() {
+            "records" => BenchReceivers::Records,
+            _ => BenchReceivers::Camera,
+        },
     };
     let threads = a.threads.unwrap_or(1);
     let pool = thread_pool(Some(threads))?;
@@ -520,11 +524,15 @@ fn cmd_bench(a: &BenchArgs) -> Res<()> {
 fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
     let Some(first) = rows.first() else { return };
     println!(
-        "{}: {} surfels ({:.0} B/surfel in the tree), {} receivers, {} on {}, {} thread(s), Ω {}, microbuffer {}",
+        "{}: {} surfels ({:.0} B/surfel in the tree), {} receivers ({}), {} on {}, {} thread(s), Ω {}, microbuffer {}",
         first.scene,
         first.surfels,
         first.bytes_per_surfel,
         first.receivers,
+        match first.kind {
+            BenchReceivers::Camera => "camera hits",
+            BenchReceivers::Records => "cache records",
+        },
         if o.spp == 1 {
             "1 spp".to_string()
         } else {
