@@ -20,6 +20,8 @@ cases=(
     "cornell-box --scheme hybrid --spp 1"
     "cornell-box-glossy --spp 1"
     "nave --spp 1"
+    "cornell-box --gathers cache"
+    "cornell-box-glossy --gathers cache --spp 1"
 )
 out="$tmp/digests.txt"
 for c in "${cases[@]}"; do

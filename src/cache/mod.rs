@@ -73,6 +73,16 @@ const FINEST_RADII: f32 = 2.0;
 /// rounding.
 const SAME_PLANE: f32 = 1e-4;
 
+/// The records around the last cell a point was blended in: the next
+/// point of the same cell and facing (most, since points come in tile
+/// order) reads them without probing the 27 cells again.
+#[derive(Clone, Copy, Default)]
+struct Around {
+    key: Option<Key>,
+    records: [u32; 27],
+    len: usize,
+}
+
 /// What the cache gives a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Lookup {
@@ -97,6 +107,11 @@ pub struct Prepared {
     pub trav: f64,
     /// See `trav`.
     pub shading: f64,
+    /// What [`Cache::lookup`] gives each point, in the order of the points
+    /// asked for, as the records stand when `prepare` returns: each point
+    /// settled while its records were made, so that it is not blended
+    /// twice.
+    pub lookups: Vec<Lookup>,
 }
 
 /// Why [`Cache::prepare`] failed.
@@ -294,7 +309,10 @@ impl Cache {
         gather: &Gather,
         what: Convolution,
     ) -> Result<Prepared, CacheError> {
-        let mut out = Prepared::default();
+        let mut out = Prepared {
+            lookups: vec![Lookup::Uncovered; points.len()],
+            ..Prepared::default()
+        };
         let mut pending: Vec<u32> = (0..points.len() as u32).collect();
         for level in 0..self.grid.levels {
             if pending.is_empty() {
@@ -322,17 +340,28 @@ impl Cache {
             keys.par_sort_unstable();
             keys.dedup();
             self.gather_cells(&keys, gather, what, &mut out)?;
-            let last = level + 1 == self.grid.levels;
-            if last {
-                break;
-            }
-            pending = pending
-                .into_par_iter()
-                .filter(|&i| {
+            // A level's records are all made now: what a point takes here
+            // is what `lookup` will find (no later level changes it).
+            // Points come in tile order, so neighbours mostly share a
+            // cell: each split keeps the last cell's records at hand.
+            let settled: Vec<Option<Lookup>> = pending
+                .par_iter()
+                .map_init(Around::default, |near, &i| {
                     let (p, n) = points[i as usize];
-                    self.grid.cell(p, level).is_some() && self.settled(p, n, level).is_none()
+                    match self.grid.cell(p, level) {
+                        None => Some(Lookup::Uncovered),
+                        Some(_) => self.settled(p, n, level, near),
+                    }
                 })
                 .collect();
+            let mut next = Vec::with_capacity(pending.len());
+            for (&i, l) in pending.iter().zip(settled) {
+                match l {
+                    Some(l) => out.lookups[i as usize] = l,
+                    None => next.push(i),
+                }
+            }
+            pending = next;
         }
         Ok(out)
     }
@@ -344,7 +373,7 @@ impl Cache {
             if self.grid.cell(p, level).is_none() {
                 return Lookup::Uncovered;
             }
-            if let Some(l) = self.settled(p, n, level) {
+            if let Some(l) = self.settled(p, n, level, &mut Around::default()) {
                 return l;
             }
         }
@@ -352,8 +381,8 @@ impl Cache {
     }
 
     /// What `p` takes at `level`, or `None` where it looks finer.
-    fn settled(&self, p: Vec3, n: Vec3, level: u32) -> Option<Lookup> {
-        let b = self.blend(p, n, level);
+    fn settled(&self, p: Vec3, n: Vec3, level: u32, near: &mut Around) -> Option<Lookup> {
+        let b = self.blend(p, n, level, near);
         let finest = level + 1 == self.grid.levels;
         let spread = b.hi - b.lo;
         if !finest {
@@ -369,9 +398,10 @@ impl Cache {
         })
     }
 
-    /// The records of `level` around `p` on its surface, blended.
+    /// The records of `level` around `p` on its surface, blended, in
+    /// [`neighbours`] order (so the sums' bits do not depend on `near`).
     #[inline]
-    fn blend(&self, p: Vec3, n: Vec3, level: u32) -> Blend {
+    fn blend(&self, p: Vec3, n: Vec3, level: u32, near: &mut Around) -> Blend {
         let mut b = Blend {
             sum: Vec3::ZERO,
             weight: 0.0,
@@ -381,14 +411,22 @@ impl Cache {
         let Some(c) = self.grid.cell(p, level) else {
             return b;
         };
+        let own = key(c, level, facing(n));
+        if near.key != Some(own) {
+            near.key = Some(own);
+            near.len = 0;
+            for k in neighbours(c, level, facing(n)) {
+                if let Some(&i) = self.cells.get(&k)
+                    && i != NONE
+                {
+                    near.records[near.len] = i;
+                    near.len += 1;
+                }
+            }
+        }
         let h = self.grid.cell_size(level);
-        for k in neighbours(c, level, facing(n)) {
-            let Some(&i) = self.cells.get(&k) else {
-                continue;
-            };
-            let Some(r) = self.records.get(i as usize) else {
-                continue;
-            };
+        for &i in &near.records[..near.len] {
+            let r = &self.records[i as usize];
             let d = (p - r.position).length() / h;
             if d >= 1.0 || !r.covers(p, n, self.slack) {
                 continue;

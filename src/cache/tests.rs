@@ -160,15 +160,16 @@ fn options(threads: usize) -> GatherOptions {
     o
 }
 
+fn bits_of(l: Lookup) -> [u32; 4] {
+    match l {
+        Lookup::Light(e) => [0, e.x.to_bits(), e.y.to_bits(), e.z.to_bits()],
+        Lookup::Uncovered => [1, 0, 0, 0],
+        Lookup::Changing => [2, 0, 0, 0],
+    }
+}
+
 fn bits(cache: &Cache, points: &[(Vec3, Vec3)]) -> Vec<[u32; 4]> {
-    points
-        .iter()
-        .map(|&(p, n)| match cache.lookup(p, n) {
-            Lookup::Light(e) => [0, e.x.to_bits(), e.y.to_bits(), e.z.to_bits()],
-            Lookup::Uncovered => [1, 0, 0, 0],
-            Lookup::Changing => [2, 0, 0, 0],
-        })
-        .collect()
+    points.iter().map(|&(p, n)| bits_of(cache.lookup(p, n))).collect()
 }
 
 #[test]
@@ -183,7 +184,11 @@ fn records_and_lookups_are_the_same_bits_for_any_threads_order_or_subset() {
             .unwrap();
         pool.install(|| {
             for part in points.chunks(points.len().div_ceil(parts)) {
-                cache.prepare(part, &gather, Convolution::Irradiance).unwrap();
+                let made = cache.prepare(part, &gather, Convolution::Irradiance).unwrap();
+                // What each point settled on while its records were made
+                // is what `lookup` finds once they are (the tiles take it).
+                let settled: Vec<[u32; 4]> = made.lookups.into_iter().map(bits_of).collect();
+                assert_eq!(settled, bits(&cache, part), "{threads} threads, {parts} parts");
             }
         });
         cache

@@ -26,31 +26,78 @@ use crate::tree::file::Fnv1a;
 pub(crate) enum Shared<'a> {
     /// The screen lattice of [`Gathers::Sparse`].
     Lattice(&'a Lattice),
-    /// The world-space records of [`Gathers::Cache`].
-    Cache(&'a Cache),
+    /// What each sample takes from the world-space records of
+    /// [`Gathers::Cache`], settled when they were made.
+    Cache(&'a Settled),
 }
 
 impl Shared<'_> {
     /// The irradiance at a camera sample through film point `film` that
-    /// hit `p` with normal `n`, or why it gathers itself.
+    /// hit `p` with normal `n`, the `nth` that tile `tile` asks for, or
+    /// why it gathers itself.
     #[inline]
-    pub fn irradiance(&self, film: (f32, f32), p: Vec3, n: Vec3, eye: Vec3) -> Served {
-        match self {
+    pub fn irradiance(
+        &self,
+        (tile, nth): (usize, usize),
+        film: (f32, f32),
+        p: Vec3,
+        n: Vec3,
+        eye: Vec3,
+    ) -> Result<Served, RenderError> {
+        Ok(match self {
             Shared::Lattice(l) => l.irradiance(film, p, n, eye),
-            Shared::Cache(c) => match c.lookup(p, n) {
+            Shared::Cache(c) => match c.get(tile, nth, p, n)? {
                 Lookup::Light(e) => Served::Light(e),
                 Lookup::Uncovered => Served::NoCorner,
                 Lookup::Changing => Served::Changing,
             },
-        }
+        })
     }
 }
 
-/// What the cache gathered for one frame.
-#[derive(Default)]
+/// What the cache gives each camera sample that asks it, settled while
+/// its records were made ([`Prepared::lookups`](crate::cache::Prepared)),
+/// in the order each tile asks, so that no sample blends its records twice.
+pub(crate) struct Settled {
+    lookups: Vec<Lookup>,
+    /// A hash of each sample's place, checked when it is read: a tile that
+    /// asked in another order than the frame traced would take another
+    /// sample's light.
+    marks: Vec<u32>,
+    /// Where each tile's samples begin, and the end.
+    starts: Vec<usize>,
+}
+
+impl Settled {
+    /// The place hash of a sample.
+    #[inline]
+    fn mark(p: Vec3, n: Vec3) -> u32 {
+        let mut h = Fnv1a::default();
+        for x in p.to_array().into_iter().chain(n.to_array()) {
+            h.write(&x.to_bits().to_le_bytes());
+        }
+        let h = h.0;
+        (h ^ h >> 32) as u32
+    }
+
+    /// Sample `nth` of tile `tile`, which lies at `p` facing `n`.
+    #[inline]
+    fn get(&self, tile: usize, nth: usize, p: Vec3, n: Vec3) -> Result<Lookup, RenderError> {
+        let i = self.starts[tile] + nth;
+        if i < self.starts[tile + 1] && self.marks[i] == Self::mark(p, n) {
+            return Ok(self.lookups[i]);
+        }
+        Err(RenderError::Check(format!(
+            "tile {tile} asked the cache for its sample {nth} at {p}, which the frame did not trace there"
+        )))
+    }
+}
+
+/// What the cache gathered for one frame, and what its samples take.
 pub(crate) struct CacheGathers {
     pub stats: TraversalStats,
     pub count: usize,
+    pub settled: Settled,
 }
 
 impl Frame<'_> {
@@ -147,10 +194,13 @@ impl Frame<'_> {
     }
 
     /// Where samples take their light from: the lattice, else the cache.
-    pub(crate) fn shared<'a>(lattice: Option<&'a Lattice>, cache: Option<&'a Cache>) -> Option<Shared<'a>> {
+    pub(crate) fn shared<'a>(
+        lattice: Option<&'a Lattice>,
+        cache: Option<&'a CacheGathers>,
+    ) -> Option<Shared<'a>> {
         match (lattice, cache) {
             (Some(l), _) => Some(Shared::Lattice(l)),
-            (None, Some(c)) => Some(Shared::Cache(c)),
+            (None, Some(c)) => Some(Shared::Cache(&c.settled)),
             (None, None) => None,
         }
     }
@@ -174,10 +224,10 @@ impl Frame<'_> {
         // The receivers the tiles will ask for: the same camera samples,
         // traced the same way (`Frame::packet`).
         let spp = self.opts.spp;
-        let points: Vec<(Vec3, Vec3)> = (0..self.tiles())
+        let per_tile: Vec<Vec<(Vec3, Vec3)>> = (0..self.tiles())
             .into_par_iter()
             .with_max_len(1)
-            .flat_map_iter(|tile| {
+            .map(|tile| {
                 let pixels = self.tile_pixels(tile);
                 (0..spp)
                     .flat_map(|s| self.packet(&pixels, s, None))
@@ -186,6 +236,12 @@ impl Frame<'_> {
                     .collect::<Vec<_>>()
             })
             .collect();
+        let mut starts = Vec::with_capacity(per_tile.len() + 1);
+        starts.push(0);
+        for t in &per_tile {
+            starts.push(starts.last().copied().unwrap_or(0) + t.len());
+        }
+        let points: Vec<(Vec3, Vec3)> = per_tile.into_iter().flatten().collect();
         let prepared = cache
             .prepare(&points, gather, self.convolution())
             .map_err(|e| match e {
@@ -198,9 +254,15 @@ impl Frame<'_> {
             })?;
         timers.trav.add(prepared.trav);
         timers.shading.add(prepared.shading);
+        let marks = points.par_iter().map(|&(p, n)| Settled::mark(p, n)).collect();
         Ok(Some(CacheGathers {
             stats: prepared.stats,
             count: prepared.records,
+            settled: Settled {
+                lookups: prepared.lookups,
+                marks,
+                starts,
+            },
         }))
     }
 }

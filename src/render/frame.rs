@@ -480,7 +480,7 @@ impl<'s> Frame<'s> {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let cached = self.prepare_cache(&mut cache, &gather, &timers)?;
-        let shared = Self::shared(lattice.as_ref(), cache.as_ref());
+        let shared = Self::shared(lattice.as_ref(), cached.as_ref());
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14

@@ -59,6 +59,9 @@ impl Frame<'_> {
         // their irradiance.
         let (mut own, mut served) = (Vec::new(), Vec::new());
         let mut misses = Vec::new();
+        // Samples that asked `shared`, in order: the cache's answers are
+        // kept in that order.
+        let mut asked = 0;
         for s in 0..opts.spp {
             let t0 = Instant::now();
             misses.clear();
@@ -85,14 +88,18 @@ impl Frame<'_> {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
                     match shared.filter(|_| !per_sample) {
-                        Some(l) => match l.irradiance(pp.film, sp.position, sp.normal, eye) {
-                            Served::Light(e) => served.push((s, pp, e)),
-                            Served::NoCorner => own.push((s, pp, Group::Pixel)),
-                            Served::Changing => {
-                                let q = quarter(pp.film, pixels[pp.pixel]);
-                                own.push((s, pp, Group::Quarter(q)))
+                        Some(l) => {
+                            let from = l.irradiance((tile, asked), pp.film, sp.position, sp.normal, eye)?;
+                            asked += 1;
+                            match from {
+                                Served::Light(e) => served.push((s, pp, e)),
+                                Served::NoCorner => own.push((s, pp, Group::Pixel)),
+                                Served::Changing => {
+                                    let q = quarter(pp.film, pixels[pp.pixel]);
+                                    own.push((s, pp, Group::Quarter(q)))
+                                }
                             }
-                        },
+                        }
                         None => own.push((s, pp, Group::Alone)),
                     }
                 }
