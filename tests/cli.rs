@@ -324,7 +324,7 @@ fn each_class_of_error_has_its_exit_status() {
 fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
     let dir = scratch("cache");
     let file = dir.join("box.cache");
-    let run = |extra: &[&str]| {
+    let render = |gathers: &str, extra: &[&str]| {
         let out = Command::new(env!("CARGO_BIN_EXE_pbgi"))
             .args([
                 "render",
@@ -335,7 +335,7 @@ fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
                 "--surfels",
                 "4000",
             ])
-            .args(["--gathers", "cache", "-o"])
+            .args(["--gathers", gathers, "-o"])
             .arg(dir.join("box.exr"))
             .args(extra)
             .output()
@@ -343,6 +343,7 @@ fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
         let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
         (out.status.code(), text)
     };
+    let run = |extra: &[&str]| render("cache", extra);
     let digest = |text: &str| {
         let line = text.lines().find(|l| l.contains("image digest"));
         line.unwrap_or_else(|| panic!("{text}"))
@@ -388,6 +389,15 @@ fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
     let missing = dir.join("missing.cache");
     let (code, text) = run(&["--cache", missing.to_str().unwrap(), "--frozen-cache"]);
     assert_eq!(code, Some(3), "a frozen cache must exist: {text}");
-    let (code, text) = run(&["--cache", path, "--gathers", "sparse"]);
-    assert_eq!(code, Some(2), "a cache file serves --gathers cache alone: {text}");
+    let (code, text) = render("sparse", &["--cache", path]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("serves a render with --gathers cache"), "{text}");
+
+    // `cache:T` is `cache --gather-threshold T`; a threshold must be above 0.
+    let (_, a) = render("cache:0.4", &[]);
+    let (_, b) = run(&["--gather-threshold", "0.4"]);
+    assert_eq!(digest(&a), digest(&b));
+    assert_ne!(digest(&a), digest(&made), "another threshold, another image");
+    let (code, text) = render("cache:0", &[]);
+    assert_eq!(code, Some(2), "{text}");
 }

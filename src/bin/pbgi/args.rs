@@ -127,7 +127,7 @@ pub struct ReportArgs {
     /// Curves at these microbuffer resolutions (comma-separated).
     #[arg(long, value_delimiter = ',')]
     pub microbuffers: Vec<usize>,
-    /// Curves at these gathers: "sparse", a sparse spacing in pixels, or "all" for dense (comma-separated).
+    /// Curves at these gathers: "sparse", a sparse spacing in pixels, "cache" or "cache:THRESHOLD" for the world-space cache, or "all" for dense (comma-separated).
     #[arg(long, value_delimiter = ',')]
     pub gathers: Vec<String>,
     /// Curves for these schemes (comma-separated; same images, other times).
@@ -247,13 +247,19 @@ impl Settings {
 }
 
 /// `--gathers`: "all" (every camera sample gathers), "sparse" (the default
-/// lattice), "cache" (world-space records), or a number: sparse gathers
-/// that many pixels apart.
+/// lattice), "cache" (world-space records; "cache:T" at threshold T), or a
+/// number: sparse gathers that many pixels apart.
 pub fn parse_gathers(g: &str) -> Res<Gathers> {
     match g.trim() {
         "all" => Ok(Gathers::All),
         "sparse" => Ok(Gathers::default()),
         "cache" => Ok(Gathers::Cache { threshold: 0.1 }),
+        g if g.starts_with("cache:") => match g["cache:".len()..].parse::<f32>() {
+            Ok(threshold) if threshold.is_finite() && threshold > 0.0 => Ok(Gathers::Cache { threshold }),
+            _ => Err(crate::exit::usage(format!(
+                "--gathers {g:?}: the cache's threshold is a number above 0"
+            ))),
+        },
         g => match (g.parse(), Gathers::default()) {
             (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
             _ => Err(crate::exit::usage(format!(
@@ -542,8 +548,13 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
                 },
                 threshold: a.gather_threshold,
             },
-            Gathers::Cache { .. } => Gathers::Cache {
-                threshold: a.gather_threshold,
+            // `--gathers cache:0.4` is `--gathers cache --gather-threshold 0.4`.
+            Gathers::Cache { threshold } => Gathers::Cache {
+                threshold: if a.gathers.trim() == "cache" {
+                    a.gather_threshold
+                } else {
+                    threshold
+                },
             },
             g => g,
         },
