@@ -14,7 +14,10 @@
 //! the records of its facing in the 27 cells around its own that lie on
 //! its surface (the
 //! screen lattice's plane and normal tests, [`Record::covers`]) and within a
-//! cell's side of it, weighted by `(1 − d/h)²`. Where they weigh too little
+//! cell's side of it, weighted by `(1 − d/h)²`: the value at the point of
+//! the plane that fits their light by weighted least squares in its tangent
+//! plane, held within their range (their weighted mean where they lie
+//! nearly on a line). Where they weigh too little
 //! in all (no record near it on its surface) or differ by more than
 //! `threshold` of their sum, it looks one level finer; at the finest level
 //! (cells about two surfel radii across) it is served, or told to gather
@@ -192,6 +195,54 @@ struct Blend {
     weight: f32,
     lo: f32,
     hi: f32,
+    /// Weighted moments of the records' offsets (u, v) in the point's
+    /// tangent plane, in cell sides, and of the light times them.
+    su: f32,
+    sv: f32,
+    suu: f32,
+    suv: f32,
+    svv: f32,
+    seu: Vec3,
+    sev: Vec3,
+    elo: Vec3,
+    ehi: Vec3,
+}
+
+/// The least determinant of the records' weighted covariance in the
+/// tangent plane (in cell sides⁴) for which a blend fits a plane to their
+/// light: below it they lie too nearly on a line, or at a point, for the
+/// plane to be read off them, and the blend is their weighted mean.
+const FIT_SPREAD: f32 = 1e-3;
+
+impl Blend {
+    /// The light at the point: the value there of the weighted
+    /// least-squares plane through the records' light (exact where the
+    /// light changes linearly along the surface, where their weighted mean
+    /// leans to the nearest records), kept within the records' own range so
+    /// that it never extrapolates their noise; their weighted mean where
+    /// they cannot hold a plane up.
+    fn light(&self) -> Vec3 {
+        let mean = self.sum / self.weight;
+        let s = self.weight;
+        let (mu, mv) = (self.su / s, self.sv / s);
+        let (cuu, cuv, cvv) = (
+            self.suu / s - mu * mu,
+            self.suv / s - mu * mv,
+            self.svv / s - mv * mv,
+        );
+        // Also false for a NaN.
+        if !(cuu * cvv - cuv * cuv > FIT_SPREAD) {
+            return mean;
+        }
+        // The first row of the inverse of the moments' matrix (symmetric:
+        // cofactors), applied to the light's moments.
+        let c00 = self.suu * self.svv - self.suv * self.suv;
+        let c01 = self.suv * self.sv - self.su * self.svv;
+        let c02 = self.su * self.suv - self.suu * self.sv;
+        let det = s * c00 + self.su * c01 + self.sv * c02;
+        let a = (self.sum * c00 + self.seu * c01 + self.sev * c02) / det;
+        a.clamp(self.elo, self.ehi)
+    }
 }
 
 impl Cache {
@@ -387,14 +438,14 @@ impl Cache {
         let spread = b.hi - b.lo;
         if !finest {
             return (b.weight >= MIN_WEIGHT && spread <= self.threshold * (b.hi + b.lo))
-                .then(|| Lookup::Light(b.sum / b.weight));
+                .then(|| Lookup::Light(b.light()));
         }
         Some(if b.weight <= 0.0 {
             Lookup::Uncovered
         } else if spread > 2.0 * self.threshold * (b.hi + b.lo) {
             Lookup::Changing
         } else {
-            Lookup::Light(b.sum / b.weight)
+            Lookup::Light(b.light())
         })
     }
 
@@ -407,6 +458,15 @@ impl Cache {
             weight: 0.0,
             lo: f32::INFINITY,
             hi: 0.0,
+            su: 0.0,
+            sv: 0.0,
+            suu: 0.0,
+            suv: 0.0,
+            svv: 0.0,
+            seu: Vec3::ZERO,
+            sev: Vec3::ZERO,
+            elo: Vec3::INFINITY,
+            ehi: Vec3::ZERO,
         };
         let Some(c) = self.grid.cell(p, level) else {
             return b;
@@ -425,9 +485,11 @@ impl Cache {
             }
         }
         let h = self.grid.cell_size(level);
+        let (t, bt) = n.any_orthonormal_pair();
         for &i in &near.records[..near.len] {
             let r = &self.records[i as usize];
-            let d = (p - r.position).length() / h;
+            let off = r.position - p;
+            let d = off.length() / h;
             if d >= 1.0 || !r.covers(p, n, self.slack) {
                 continue;
             }
@@ -438,6 +500,16 @@ impl Cache {
             let l = e.x + e.y + e.z;
             b.lo = b.lo.min(l);
             b.hi = b.hi.max(l);
+            let (u, v) = (off.dot(t) / h, off.dot(bt) / h);
+            b.su += w * u;
+            b.sv += w * v;
+            b.suu += w * u * u;
+            b.suv += w * u * v;
+            b.svv += w * v * v;
+            b.seu += e * (w * u);
+            b.sev += e * (w * v);
+            b.elo = b.elo.min(e);
+            b.ehi = b.ehi.max(e);
         }
         b
     }

@@ -130,6 +130,58 @@ fn a_record_is_turned_to_the_samples_normal_by_its_rotational_gradient() {
     assert_eq!(cache.lookup(p, Vec3::Y), Lookup::Light(Vec3::splat(2.0)));
 }
 
+/// Light that changes linearly along a surface is blended exactly: the
+/// records' weighted least-squares plane is read at the point, where their
+/// weighted mean leans to the nearest record.
+#[test]
+fn a_blend_is_exact_for_light_linear_along_the_surface() {
+    let tree = corner();
+    let cache0 = Cache::new(&tree, CacheOptions::default());
+    let h = cache0.grid.cell_size(0);
+    let origin = cache0.grid.origin;
+    let linear = |p: Vec3| Vec3::new(1.0, 2.0, 0.5) * (1.0 + 0.2 * p.x - 0.1 * p.z);
+    // One floor record at the centre of each level-0 cell.
+    let mut records = Vec::new();
+    for i in 0..8 {
+        for k in 0..8 {
+            let position = Vec3::new(
+                origin.x + h * (i as f32 + 0.5),
+                0.0,
+                origin.z + h * (k as f32 + 0.5),
+            );
+            records.push(Record {
+                position,
+                normal: Vec3::Y,
+                e: linear(position),
+                gradients: Default::default(),
+            });
+        }
+    }
+    let cache = filed(&tree, &records);
+    let mut leaned = 0.0f32;
+    for p in [
+        Vec3::new(1.1, 0.0, 1.1),
+        Vec3::new(2.3, 0.0, 0.9),
+        Vec3::new(1.7, 0.0, 2.6),
+    ] {
+        let e = match cache.lookup(p, Vec3::Y) {
+            Lookup::Light(e) => e,
+            other => panic!("{other:?} at {p}"),
+        };
+        let want = linear(p);
+        assert!(
+            ((e - want) / want).abs().max_element() < 1e-5,
+            "{e} against {want} at {p}"
+        );
+        let b = cache.blend(p, Vec3::Y, 0, &mut Around::default());
+        leaned = leaned.max(((b.sum / b.weight - want) / want).abs().max_element());
+    }
+    assert!(
+        leaned > 1e-3,
+        "the points lie where a mean would lean ({leaned}): the test would prove little"
+    );
+}
+
 /// Fewer surfels under emulation (`PBGI_QC_TESTS` below 50, as the ARM
 /// stage sets it).
 fn emulated() -> bool {
