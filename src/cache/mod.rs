@@ -230,8 +230,8 @@ impl Blend {
             self.suv / s - mu * mv,
             self.svv / s - mv * mv,
         );
-        // Also false for a NaN.
-        if !(cuu * cvv - cuv * cuv > FIT_SPREAD) {
+        let spread = cuu * cvv - cuv * cuv;
+        if spread.is_nan() || spread <= FIT_SPREAD {
             return mean;
         }
         // The first row of the inverse of the moments' matrix (symmetric:
