@@ -32,7 +32,7 @@ fn run(scene: &Scene, opts: RenderOptions) -> RenderOutput {
     render(scene, &opts, &|_, _| {}).expect("renders")
 }
 
-fn luminance(img: &pbgi::render::Image) -> Vec<f64> {
+pub(crate) fn luminance(img: &pbgi::render::Image) -> Vec<f64> {
     img.pixels
         .iter()
         .map(|p| (p.x as f64 + p.y as f64 + p.z as f64) / 3.0)
@@ -41,7 +41,7 @@ fn luminance(img: &pbgi::render::Image) -> Vec<f64> {
 
 /// Relative RMSE and bias of `a` against `b`, over the pixels that do not
 /// see the light (whose radiance dwarfs the rest and holds no gather).
-fn relative_error(a: &[f64], b: &[f64]) -> (f64, f64) {
+pub(crate) fn relative_error(a: &[f64], b: &[f64]) -> (f64, f64) {
     let keep: Vec<(f64, f64)> = a
         .iter()
         .zip(b)

@@ -290,10 +290,15 @@ fn the_cache_converges_to_the_gathers_as_its_threshold_shrinks() {
         }
         ((num / den).sqrt(), cache.len(), served)
     };
-    let coarse = error(0.3);
+    // Thresholds eight times apart: between nearer ones (0.3 and 0.1) the
+    // error can hold still to 0.5 % of itself while the records change,
+    // since the truth here, a gather at each point, carries the gathers'
+    // own point-to-point noise (1.66 and 1.67 % there; 1.74, 1.67 and
+    // 0.98 % at these three).
+    let coarse = error(0.8);
     let mid = error(0.1);
-    let fine = error(0.03);
-    eprintln!("threshold 0.3 / 0.1 / 0.03: (rel. RMS error, records, served) {coarse:?} {mid:?} {fine:?}");
+    let fine = error(0.0125);
+    eprintln!("threshold 0.8 / 0.1 / 0.0125: (rel. RMS error, records, served) {coarse:?} {mid:?} {fine:?}");
     assert!(coarse.0 > mid.0 && mid.0 > fine.0, "{coarse:?} {mid:?} {fine:?}");
     assert!(mid.0 < 0.05, "{mid:?}");
     assert!(coarse.1 < mid.1 && mid.1 < fine.1);
