@@ -10,7 +10,7 @@
 //! asks for it. A record's place and light depend on its
 //! cell alone, never on who asked for it, in which order or on which thread.
 //!
-//! **What a point takes.** At each level from [`COARSEST`] (cells 1/32 of
+//! **What a point takes.** At each level from level 2 (cells 1/32 of
 //! the cube's side; coarser ones span too much of a room), a point blends
 //! the records of its facing in the 27 cells around its own that lie on
 //! its surface (the
