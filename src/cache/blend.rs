@@ -42,6 +42,25 @@ pub(super) struct Blend {
 const FIT_SPREAD: f32 = 1e-3;
 
 impl Blend {
+    /// No record yet.
+    pub(super) fn empty() -> Self {
+        Blend {
+            sum: Vec3::ZERO,
+            weight: 0.0,
+            lo: f32::INFINITY,
+            hi: 0.0,
+            su: 0.0,
+            sv: 0.0,
+            suu: 0.0,
+            suv: 0.0,
+            svv: 0.0,
+            seu: Vec3::ZERO,
+            sev: Vec3::ZERO,
+            elo: Vec3::INFINITY,
+            ehi: Vec3::ZERO,
+        }
+    }
+
     /// The light at the point: the value there of the weighted
     /// least-squares plane through the records' light (exact where the
     /// light changes linearly along the surface, where their weighted mean
@@ -68,6 +87,12 @@ impl Blend {
         let c02 = self.su * self.suv - self.suu * self.sv;
         let det = s * c00 + self.su * c01 + self.sv * c02;
         let a = (self.sum * c00 + self.seu * c01 + self.sev * c02) / det;
-        a.clamp(self.elo, self.ehi)
+        // A NaN stays NaN (glam's `clamp` would make it a bound): only a
+        // defect upstream brings one, and the renderer reports it.
+        if a.is_nan() {
+            a
+        } else {
+            a.clamp(self.elo, self.ehi)
+        }
     }
 }

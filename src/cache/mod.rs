@@ -269,7 +269,7 @@ impl Cache {
     /// them in: level by level, each level's cells in key order (facing,
     /// then Morton order), 16 to a packet. For timing the schemes on the
     /// receivers the cache gathers.
-    pub fn packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
+    pub(crate) fn packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
         let mut held: Vec<(Key, u32)> = self
             .cells
             .iter()
@@ -405,29 +405,16 @@ impl Cache {
     /// [`neighbours`] order (so the sums' bits do not depend on `near`).
     #[inline]
     fn blend(&self, p: Vec3, n: Vec3, level: u32, near: &mut Around) -> Blend {
-        let mut b = Blend {
-            sum: Vec3::ZERO,
-            weight: 0.0,
-            lo: f32::INFINITY,
-            hi: 0.0,
-            su: 0.0,
-            sv: 0.0,
-            suu: 0.0,
-            suv: 0.0,
-            svv: 0.0,
-            seu: Vec3::ZERO,
-            sev: Vec3::ZERO,
-            elo: Vec3::INFINITY,
-            ehi: Vec3::ZERO,
-        };
+        let mut b = Blend::empty();
         let Some(c) = self.grid.cell(p, level) else {
             return b;
         };
-        let own = key(c, level, facing(n));
+        let f = facing(n);
+        let own = key(c, level, f);
         if near.key != Some(own) {
             near.key = Some(own);
             near.len = 0;
-            for k in neighbours(c, level, facing(n)) {
+            for k in neighbours(c, level, f) {
                 if let Some(&i) = self.cells.get(&k)
                     && i != NONE
                 {

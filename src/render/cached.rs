@@ -154,10 +154,7 @@ impl Frame<'_> {
     /// the cache, or writing failed.
     pub fn save_cache(&self, w: impl Write) -> Result<usize, RenderError> {
         let threshold = self.cache_threshold()?;
-        let mut held = self
-            .cache
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut held = self.held_cache();
         let c = held.get_or_insert_with(|| Cache::new(&self.tree, CacheOptions { threshold }));
         c.save(w, self.cache_settings())
             .map_err(|e| RenderError::CacheFile(CacheFileError::Io(e)))?;
@@ -166,21 +163,21 @@ impl Frame<'_> {
 
     /// Records the cache holds (gathered or loaded); 0 without one.
     pub fn cache_len(&self) -> usize {
-        self.cache
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .as_ref()
-            .map_or(0, Cache::len)
+        self.held_cache().as_ref().map_or(0, Cache::len)
     }
 
     /// The cache's records' receivers in the packets a render from scratch
     /// gathers them in ([`Cache::packets`]); none without a cache.
     pub(crate) fn cache_packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
+        self.held_cache().as_ref().map_or_else(Vec::new, Cache::packets)
+    }
+
+    /// The frame's cache, locked (a render that panicked holding it left
+    /// records that are each whole: they are kept).
+    pub(crate) fn held_cache(&self) -> std::sync::MutexGuard<'_, Option<Cache>> {
         self.cache
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .as_ref()
-            .map_or_else(Vec::new, Cache::packets)
     }
 
     /// The cache's threshold, or why this render has no cache.

@@ -91,7 +91,7 @@ pub struct Frame<'s> {
     environment: Option<Arc<Environment>>,
     /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
-    pub(crate) cache: Mutex<Option<Cache>>,
+    pub(super) cache: Mutex<Option<Cache>>,
 }
 
 impl<'s> Frame<'s> {
@@ -475,10 +475,7 @@ impl<'s> Frame<'s> {
         let done = AtomicU64::new(0);
         let timers = Timers::default();
         let lattice = self.lattice(&gather, &timers)?;
-        let mut cache = self
-            .cache
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut cache = self.held_cache();
         let cached = self.prepare_cache(&mut cache, &gather, &timers)?;
         let shared = Self::shared(lattice.as_ref(), cached.as_ref());
 
