@@ -269,7 +269,7 @@ impl Cache {
     /// them in: level by level, each level's cells in key order (facing,
     /// then Morton order), 16 to a packet. For timing the schemes on the
     /// receivers the cache gathers.
-    pub(crate) fn packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
+    pub fn packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
         let mut held: Vec<(Key, u32)> = self
             .cells
             .iter()
