@@ -1,9 +1,9 @@
 //! The integration tests, one binary. Each file of `tests/` is a module
-//! here, not a test binary of its own: the release profile links every
-//! binary with fat LTO and one codegen unit, about 30 s apiece on this
-//! project, so nineteen binaries cost the README's test command about ten
-//! CPU-minutes of linking (five on two cores). A file's tests are named after it:
-//! `cargo test --release --test suite -- gathers::` runs `tests/gathers.rs`.
+//! here, not a test binary of its own: each binary links the whole crate
+//! (with fat LTO under `--release`, about 30 s apiece), so one binary
+//! keeps the README's test command's links to a few. A file's tests are
+//! named after it:
+//! `cargo test --profile quick --test suite -- gathers::` runs `tests/gathers.rs`.
 
 mod common;
 
