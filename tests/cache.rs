@@ -31,9 +31,57 @@ fn bits(out: &RenderOutput) -> Vec<[u32; 3]> {
         .collect()
 }
 
+/// The small box with its floor and tall block glossy, as rough as the
+/// lobes the cache serves (and its back wall without its bumps, which
+/// gather at each sample).
+fn rough() -> Scene {
+    let mut s = pbgi::scene::builtin::cornell_box_glossy();
+    s.camera.width = 48;
+    s.camera.height = 40;
+    for m in &mut s.materials {
+        if let Some(g) = &mut m.glossy {
+            g.roughness = g.roughness.max(0.4);
+        }
+        m.bump = None;
+    }
+    s
+}
+
 #[test]
 fn a_cached_render_is_the_same_bits_cropped_on_any_threads_and_as_a_later_frame() {
-    let s = small();
+    same_bits_cropped_on_any_threads_and_as_a_later_frame(&small());
+}
+
+#[test]
+fn lobes_served_by_the_cache_keep_the_same_bits_cropped_on_any_threads_and_as_a_later_frame() {
+    let s = rough();
+    same_bits_cropped_on_any_threads_and_as_a_later_frame(&s);
+    let served = render(&s, &opts(), &|_, _| {}).unwrap();
+    let per_sample = render(
+        &s,
+        &RenderOptions {
+            glossy_cache_roughness: 2.0,
+            ..opts()
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    // The lobes took their light from records: at this size, a quarter
+    // of their samples still lie where their records differ too much, or
+    // on none, and gather themselves.
+    let own = |o: &RenderOutput| o.receivers - o.records;
+    assert!(
+        2 * own(&served) < own(&per_sample),
+        "{} samples gathered themselves with the lobes served ({} records), {} with them gathering ({} records)",
+        own(&served),
+        served.records,
+        own(&per_sample),
+        per_sample.records
+    );
+}
+
+fn same_bits_cropped_on_any_threads_and_as_a_later_frame(s: &Scene) {
+    let s = s.clone();
     let full = render(&s, &opts(), &|_, _| {}).expect("renders");
     let want = bits(&full);
     assert!(

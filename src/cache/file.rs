@@ -288,7 +288,15 @@ impl Cache {
             });
         }
 
-        let mut cache = Cache::new(tree, opts);
+        // The file holds records' irradiance alone: a cache read from it
+        // keeps no incident light.
+        let mut cache = Cache::new(
+            tree,
+            CacheOptions {
+                incident: false,
+                ..opts
+            },
+        );
         let mismatch =
             |what, file: String, expected: String| Err(CacheFileError::Mismatch { what, file, expected });
         let (tree_hash, file_settings) = (rd.u64(), rd.u64());

@@ -37,15 +37,17 @@ pub mod file;
 mod grid;
 pub(crate) mod record;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::brdf::GlossyLobe;
 use crate::cut::{Receiver, TraversalStats};
 use crate::error::Error;
 use crate::gather::Gather;
-use crate::microbuffer::{Convolution, Gradients};
+use crate::microbuffer::{Convolution, Gradients, Table, reflect};
 use crate::simd::LANES;
 use crate::tree::Tree;
 use crate::tree::file::Fnv1a;
@@ -60,11 +62,18 @@ pub struct CacheOptions {
     /// Relative difference between the records a point blends that sends
     /// it one level finer.
     pub threshold: f32,
+    /// Whether each record also keeps the light each pixel of its
+    /// microbuffer let through (its incident radiance), so that glossy
+    /// lobes near it are convolved from the records ([`Cache::reflect`]).
+    pub incident: bool,
 }
 
 impl Default for CacheOptions {
     fn default() -> Self {
-        CacheOptions { threshold: 0.1 }
+        CacheOptions {
+            threshold: 0.1,
+            incident: false,
+        }
     }
 }
 
@@ -117,6 +126,8 @@ pub struct Prepared {
     /// settled while its records were made, so that it is not blended
     /// twice.
     pub lookups: Vec<Lookup>,
+    /// The level each point settled at (what [`Cache::reflect`] reads).
+    pub levels: Vec<u8>,
 }
 
 /// Why [`Cache::prepare`] failed.
@@ -171,6 +182,10 @@ pub struct Cache {
     /// [`NONE`] where the cell holds no surfel of that facing.
     cells: KeyMap<u32>,
     records: Vec<Record>,
+    /// With [`CacheOptions::incident`]: the records' microbuffer table,
+    /// and per record its pixels' incident light, record after record.
+    table: Option<Arc<Table>>,
+    incident: Option<Vec<Vec3>>,
 }
 
 /// A cell without a record.
@@ -247,6 +262,8 @@ impl Cache {
                 .collect(),
             cells: KeyMap::default(),
             records: Vec::new(),
+            table: None,
+            incident: opts.incident.then(Vec::new),
         }
     }
 
@@ -314,6 +331,7 @@ impl Cache {
     ) -> Result<Prepared, CacheError> {
         let mut out = Prepared {
             lookups: vec![Lookup::Uncovered; points.len()],
+            levels: vec![0; points.len()],
             ..Prepared::default()
         };
         let mut pending: Vec<u32> = (0..points.len() as u32).collect();
@@ -360,7 +378,10 @@ impl Cache {
             let mut next = Vec::with_capacity(pending.len());
             for (&i, l) in pending.iter().zip(settled) {
                 match l {
-                    Some(l) => out.lookups[i as usize] = l,
+                    Some(l) => {
+                        out.lookups[i as usize] = l;
+                        out.levels[i as usize] = level as u8;
+                    }
                     None => next.push(i),
                 }
             }
@@ -381,6 +402,40 @@ impl Cache {
             }
         }
         Lookup::Uncovered
+    }
+
+    /// The light a glossy lobe at `p` (normal `n`, as asked of
+    /// [`prepare`](Self::prepare); shading normal `shading`, seen from
+    /// `wo`) reflects from the incident light of the records it settled on
+    /// at `level` ([`Prepared::levels`]): each record's light convolved
+    /// with the lobe in its own frame, weighted as the blend weighs it.
+    /// Zero without [`CacheOptions::incident`].
+    pub fn reflect(&self, p: Vec3, n: Vec3, level: u32, lobe: &GlossyLobe, shading: Vec3, wo: Vec3) -> Vec3 {
+        let (Some(all), Some(table)) = (&self.incident, &self.table) else {
+            return Vec3::ZERO;
+        };
+        let Some(c) = self.grid.cell(p, level) else {
+            return Vec3::ZERO;
+        };
+        let pixels = table.dir.len();
+        let h = self.grid.cell_size(level);
+        let (mut sum, mut weight) = (Vec3::ZERO, 0.0);
+        for k in neighbours(c, level, facing(n)) {
+            let Some(&i) = self.cells.get(&k) else { continue };
+            if i == NONE {
+                continue;
+            }
+            let r = &self.records[i as usize];
+            let d = (r.position - p).length() / h;
+            if d >= 1.0 || !r.covers(p, n, self.slack) {
+                continue;
+            }
+            let w = (1.0 - d) * (1.0 - d);
+            let light = &all[i as usize * pixels..(i as usize + 1) * pixels];
+            sum += reflect(table, r.normal, light, lobe, shading, wo) * w;
+            weight += w;
+        }
+        if weight > 0.0 { sum / weight } else { Vec3::ZERO }
     }
 
     /// What `p` takes at `level`, or `None` where it looks finer.
@@ -485,6 +540,7 @@ impl Cache {
         // Sorted keys run facing by facing, neighbours in Morton order: a
         // packet's receivers face one way and share most of their cuts.
         let asked: Vec<(Vec3, Vec3)> = found.iter().flatten().copied().collect();
+        let keep = self.incident.is_some();
         let packets = asked
             .par_chunks(LANES)
             .map_init(
@@ -513,13 +569,32 @@ impl Cache {
                             .collect(),
                         Convolution::Occlusion => vec![Gradients::default(); e.len()],
                     };
+                    // Occlusion leaves no light to keep: dark pixels.
+                    let mut seen = Vec::new();
+                    if keep {
+                        for b in g.buffers().iter().take(e.len()) {
+                            let mut l = Vec::new();
+                            match what {
+                                Convolution::Irradiance => b.incident(&mut l),
+                                Convolution::Occlusion => l.resize(b.pixels(), Vec3::ZERO),
+                            }
+                            seen.push((l, Arc::clone(b.table())));
+                        }
+                    }
                     let e: Vec<(Vec3, Gradients)> = e.into_iter().zip(slopes).collect();
-                    Ok((e, stats, (t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
+                    Ok((
+                        e,
+                        seen,
+                        stats,
+                        (t1 - t0).as_secs_f64(),
+                        t1.elapsed().as_secs_f64(),
+                    ))
                 },
             )
             .collect::<Result<Vec<_>, _>>()?;
         let mut light = Vec::with_capacity(asked.len());
-        for (chunk, (e, stats, trav, shading)) in asked.chunks(LANES).zip(packets) {
+        let mut seen_all = Vec::new();
+        for (chunk, (e, seen, stats, trav, shading)) in asked.chunks(LANES).zip(packets) {
             out.stats.merge(&stats);
             out.trav += trav;
             out.shading += shading;
@@ -529,13 +604,26 @@ impl Cache {
                 }
                 light.push((e, g));
             }
+            for ((&(position, _), (l, table)), &(e, _)) in
+                chunk.iter().zip(seen).zip(&light[light.len() - chunk.len()..])
+            {
+                if !l.iter().all(|v| v.is_finite()) {
+                    return Err(CacheError::NonFinite { position, value: e });
+                }
+                self.table.get_or_insert(table);
+                seen_all.push(l);
+            }
         }
+        let mut seen_all = seen_all.into_iter();
         // One light per candidate, in `found`'s order.
         let mut next = 0;
         for (&k, f) in keys.iter().zip(&found) {
             let index = match *f {
                 Some((position, normal)) => {
                     let (e, gradients) = light[next];
+                    if let (Some(all), Some(l)) = (self.incident.as_mut(), seen_all.next()) {
+                        all.extend(l);
+                    }
                     self.records.push(Record {
                         position,
                         normal,

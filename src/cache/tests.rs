@@ -1,4 +1,5 @@
 use super::*;
+use crate::brdf::GlossyLobe;
 use crate::gather::GatherOptions;
 use crate::{PointCloud, Surfel};
 
@@ -273,7 +274,13 @@ fn the_cache_converges_to_the_gathers_as_its_threshold_shrinks() {
     let gather = Gather::new(&tree, &options(2)).unwrap();
     let exact = gather.irradiance(&points).unwrap();
     let error = |threshold: f32| {
-        let mut cache = Cache::new(&tree, CacheOptions { threshold });
+        let mut cache = Cache::new(
+            &tree,
+            CacheOptions {
+                threshold,
+                incident: false,
+            },
+        );
         cache.prepare(&points, &gather, Convolution::Irradiance).unwrap();
         let (mut num, mut den, mut served) = (0.0f64, 0.0f64, 0);
         for (&(p, n), e) in points.iter().zip(&exact) {
@@ -389,4 +396,93 @@ fn a_cache_file_gives_back_its_records_and_refuses_a_damaged_or_foreign_one() {
     assert_eq!(invalid(&|b| b[56 + 7] = 0xF0), 56, "a level past the cube's");
     // The second record's key moved before the first's.
     assert_eq!(invalid(&|b| b.copy_within(56..64, 176)), 176, "keys out of order");
+}
+
+/// A record that keeps its incident light reflects it through a lobe, at
+/// its own place and normal, exactly as a glossy gather there does: the
+/// same pixels, directions and weights, bit for bit (no sky here, whose
+/// sum a gather holds at least zero).
+#[test]
+fn a_records_incident_light_reflects_a_lobe_as_its_own_gather_does() {
+    // The corner with its floor lit: the wall sees it.
+    let mut s = Vec::new();
+    for i in 0..30 {
+        for j in 0..30 {
+            let (u, v) = (0.05 + 0.1 * i as f32, 0.05 + 0.1 * j as f32);
+            s.push(Surfel {
+                position: Vec3::new(u, 0.0, v),
+                normal: Vec3::Y,
+                radius: 0.05,
+                radiance: Vec3::new(1.0, 0.5, 0.25 + u / 3.0),
+            });
+            s.push(Surfel {
+                position: Vec3::new(0.0, u, v),
+                normal: Vec3::X,
+                radius: 0.05,
+                radiance: Vec3::ZERO,
+            });
+        }
+    }
+    let tree = Tree::build(&PointCloud::new(s).unwrap());
+    let gather = Gather::new(
+        &tree,
+        &GatherOptions {
+            microbuffer: 12,
+            ..GatherOptions::default()
+        },
+    )
+    .unwrap();
+    let mut cache = Cache::new(
+        &tree,
+        CacheOptions {
+            threshold: 0.1,
+            incident: true,
+        },
+    );
+    let points = [
+        (Vec3::new(0.0, 0.7, 1.3), Vec3::X),
+        (Vec3::new(0.0, 2.1, 2.2), Vec3::X),
+    ];
+    cache.prepare(&points, &gather, Convolution::Irradiance).unwrap();
+    let table = cache.table.clone().expect("records made");
+    let pixels = table.dir.len();
+    let all = cache.incident.as_ref().unwrap();
+    assert_eq!(all.len(), cache.len() * pixels, "every record keeps its pixels");
+    let lobe = GlossyLobe {
+        specular: Vec3::new(0.9, 0.6, 0.3),
+        roughness: 0.4,
+    };
+    let mut lit = 0;
+    for (i, r) in cache
+        .records()
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.normal == Vec3::X)
+    {
+        let wo = Vec3::new(0.8, -0.3, 0.5).normalize();
+        let want = gather
+            .glossy(&[crate::GlossyReceiver {
+                position: r.position,
+                normal: r.normal,
+                wo,
+                lobe,
+            }])
+            .unwrap()[0];
+        let got = reflect(
+            &table,
+            r.normal,
+            &all[i * pixels..(i + 1) * pixels],
+            &lobe,
+            r.normal,
+            wo,
+        );
+        assert_eq!(
+            got.to_array().map(f32::to_bits),
+            want.to_array().map(f32::to_bits),
+            "record at {}",
+            r.position
+        );
+        lit += usize::from(want.min_element() > 0.0);
+    }
+    assert!(lit > 0, "no wall record saw the lit floor");
 }

@@ -8,6 +8,7 @@ use glam::Vec3;
 use super::compose;
 pub(crate) use super::fragments::Fragments;
 use super::gradients::{self, Gradients};
+use super::incident::{self, basis};
 use super::locate::{FrameLanes, Located, NodeLight, NodeSplat, locate};
 use super::near::{self, Near, NearField};
 use super::open;
@@ -110,15 +111,8 @@ impl MicroBuffer {
 
     /// Clears the raster for a receiver at `position` facing `normal` (unit).
     pub fn reset(&mut self, position: Vec3, normal: Vec3) {
-        // Duff et al., "Building an orthonormal basis, revisited".
-        let n = normal;
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let bt = Vec3::new(b, sign + n.y * n.y * a, -n.y);
         self.position = position;
-        self.frame = [t, bt, n];
+        self.frame = basis(normal);
         self.frags.clear();
         self.near = None;
         self.open.clear();
@@ -294,6 +288,18 @@ impl MicroBuffer {
     /// the gatherer's `shade` leaves it), with no second composition.
     pub(crate) fn turning(&self) -> [Vec3; 3] {
         gradients::rotation(&self.table, &self.scratch, &self.site(), self.sky().as_ref())
+    }
+
+    /// The light each pixel let through in the buffer's last irradiance
+    /// convolution, the sky included (`incident`): what a radiance record
+    /// keeps. Valid when [`turning`](Self::turning) is.
+    pub(crate) fn incident(&self, out: &mut Vec<Vec3>) {
+        incident::incident(&self.scratch, &self.site(), self.sky().as_ref(), &self.table, out);
+    }
+
+    /// The buffer's table of pixels.
+    pub(crate) fn table(&self) -> &Arc<Table> {
+        &self.table
     }
 
     /// Glossy reflection towards `wo` (world, unit):

@@ -40,6 +40,7 @@ mod compose;
 mod draw;
 mod fragments;
 mod gradients;
+mod incident;
 mod locate;
 mod near;
 mod open;
@@ -51,9 +52,11 @@ mod tiles;
 
 pub use buffer::{MicroBuffer, MicroBufferSink};
 pub use gradients::Gradients;
+pub(crate) use incident::reflect;
 pub use near::{NEAR_RADII, Near, NearField, Sight};
 pub use shade::{Convolution, PacketCut, shade_cuts, shade_packet};
 pub(crate) use shade::{shade_cuts_near, shade_packet_near};
+pub(crate) use table::Table;
 
 #[cfg(test)]
 mod tests;

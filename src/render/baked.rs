@@ -103,6 +103,7 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
     for (name, v) in [
         ("glossy_max_solid_angle", opts.glossy_max_solid_angle),
         ("glossy_light_offset", opts.glossy_light_offset),
+        ("glossy_cache_roughness", opts.glossy_cache_roughness),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(Error::InvalidParameter {

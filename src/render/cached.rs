@@ -11,11 +11,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::baked::bake_record;
-use super::frame::{Frame, Timers};
+use super::frame::{Frame, PacketPoint, Timers};
 use super::options::Gathers;
 use super::output::RenderError;
 use super::sparse::{Lattice, Served};
-use crate::cache::{Cache, CacheError, CacheFileError, CacheOptions, Lookup};
+use crate::cache::{Cache, CacheError, CacheFileError, CacheOptions, Lookup, Prepared};
 use crate::cut::TraversalStats;
 use crate::gather::Gather;
 use crate::microbuffer::Convolution;
@@ -46,7 +46,7 @@ impl Shared<'_> {
     ) -> Result<Served, RenderError> {
         Ok(match self {
             Shared::Lattice(l) => l.irradiance(film, p, n, eye),
-            Shared::Cache(c) => match c.get(tile, nth, p, n)? {
+            Shared::Cache(c) => match c.get(tile, nth, p, n)?.0 {
                 Lookup::Light(e) => Served::Light(e),
                 Lookup::Uncovered => Served::NoCorner,
                 Lookup::Changing => Served::Changing,
@@ -60,6 +60,7 @@ impl Shared<'_> {
 /// in the order each tile asks, so that no sample blends its records twice.
 pub(crate) struct Settled {
     lookups: Vec<Lookup>,
+    levels: Vec<u8>,
     /// A hash of each sample's place, checked when it is read: a tile that
     /// asked in another order than the frame traced would take another
     /// sample's light.
@@ -80,16 +81,50 @@ impl Settled {
         (h ^ h >> 32) as u32
     }
 
-    /// Sample `nth` of tile `tile`, which lies at `p` facing `n`.
+    /// Sample `nth` of tile `tile`, which lies at `p` facing `n`: what it
+    /// takes, and the level it settled at.
     #[inline]
-    fn get(&self, tile: usize, nth: usize, p: Vec3, n: Vec3) -> Result<Lookup, RenderError> {
+    fn get(&self, tile: usize, nth: usize, p: Vec3, n: Vec3) -> Result<(Lookup, u32), RenderError> {
         let i = self.starts[tile] + nth;
         if i < self.starts[tile + 1] && self.marks[i] == Self::mark(p, n) {
-            return Ok(self.lookups[i]);
+            return Ok((self.lookups[i], u32::from(self.levels[i])));
         }
         Err(RenderError::Check(format!(
             "tile {tile} asked the cache for its sample {nth} at {p}, which the frame did not trace there"
         )))
+    }
+}
+
+/// The cache of the receivers whose lobes take their light from records
+/// ([`Frame::lobe_cached`]), and what each of a frame's samples settled on.
+pub(crate) struct Lobes<'a> {
+    pub cache: &'a Cache,
+    pub settled: &'a Settled,
+}
+
+impl Lobes<'_> {
+    /// The indirect light camera sample `pp`, the `nth` of tile `tile`
+    /// to ask, reflects (its diffuse part from the records' blended
+    /// irradiance, its lobe convolved with their incident light), or
+    /// `None` where it gathers itself.
+    pub fn light(
+        &self,
+        frame: &Frame,
+        (tile, nth): (usize, usize),
+        pp: &PacketPoint,
+    ) -> Result<Option<Vec3>, RenderError> {
+        let sp = &pp.point;
+        let (lookup, level) = self.settled.get(tile, nth, sp.position, sp.normal)?;
+        let Lookup::Light(e) = lookup else {
+            return Ok(None);
+        };
+        let mut l = sp.albedo * std::f32::consts::FRAC_1_PI * e;
+        if let Some(lobe) = frame.scene.materials[sp.material].lobe() {
+            l += self
+                .cache
+                .reflect(sp.position, sp.normal, level, &lobe, sp.normal, sp.wo);
+        }
+        Ok(Some(l))
     }
 }
 
@@ -98,6 +133,8 @@ pub(crate) struct CacheGathers {
     pub stats: TraversalStats,
     pub count: usize,
     pub settled: Settled,
+    /// The same for the samples whose lobes the cache serves.
+    pub lobes: Option<Settled>,
 }
 
 impl Frame<'_> {
@@ -140,7 +177,15 @@ impl Frame<'_> {
     /// or settings ([`RenderError::CacheFile`]).
     pub fn load_cache(&mut self, r: impl Read) -> Result<usize, RenderError> {
         let threshold = self.cache_threshold()?;
-        let c = Cache::load(r, &self.tree, CacheOptions { threshold }, self.cache_settings())?;
+        let c = Cache::load(
+            r,
+            &self.tree,
+            CacheOptions {
+                threshold,
+                incident: false,
+            },
+            self.cache_settings(),
+        )?;
         let n = c.len();
         *self
             .cache
@@ -155,7 +200,15 @@ impl Frame<'_> {
     pub fn save_cache(&self, w: impl Write) -> Result<usize, RenderError> {
         let threshold = self.cache_threshold()?;
         let mut held = self.held_cache();
-        let c = held.get_or_insert_with(|| Cache::new(&self.tree, CacheOptions { threshold }));
+        let c = held.get_or_insert_with(|| {
+            Cache::new(
+                &self.tree,
+                CacheOptions {
+                    threshold,
+                    incident: false,
+                },
+            )
+        });
         c.save(w, self.cache_settings())
             .map_err(|e| RenderError::CacheFile(CacheFileError::Io(e)))?;
         Ok(c.len())
@@ -202,13 +255,40 @@ impl Frame<'_> {
         }
     }
 
+    /// What the lobe cache serves: its records and what the frame's
+    /// samples settled on, where it gathered for them.
+    pub(crate) fn lobes<'a>(cached: Option<&'a CacheGathers>, cache: Option<&'a Cache>) -> Option<Lobes<'a>> {
+        Some(Lobes {
+            cache: cache?,
+            settled: cached?.lobes.as_ref()?,
+        })
+    }
+
+    /// Whether camera samples of `material` take their light from the
+    /// lobe cache: with the cache, a glossy lobe at least
+    /// [`glossy_cache_roughness`](super::RenderOptions::glossy_cache_roughness)
+    /// rough on a surface without bump or normal map.
+    pub(crate) fn lobe_cached(&self, material: usize) -> bool {
+        let m = &self.scene.materials[material];
+        matches!(self.opts.gathers, Gathers::Cache { .. })
+            && self.glossy_apart()
+            && m.bump.is_none()
+            && m.normal_map.is_none()
+            && m.glossy
+                .is_some_and(|g| g.roughness >= self.opts.glossy_cache_roughness)
+    }
+
     /// Gathers into `cache` (made here on a frame's first render with the
-    /// cache) the records the window's camera samples need; `None` unless
-    /// the render gathers through the cache.
+    /// cache) the records the window's camera samples need, and into
+    /// `lobes` (with `glossy`, the gather at the glossy Ω and N) those its
+    /// samples with lobes the cache serves need; `None` unless the render
+    /// gathers through the cache.
     pub(crate) fn prepare_cache(
         &self,
         cache: &mut Option<Cache>,
+        lobes: &mut Option<Cache>,
         gather: &Gather,
+        glossy: Option<&Gather>,
         timers: &Timers,
     ) -> Result<Option<CacheGathers>, RenderError> {
         let Gathers::Cache { threshold } = self.opts.gathers else {
@@ -217,49 +297,84 @@ impl Frame<'_> {
         if !self.needs_points {
             return Ok(None);
         }
-        let cache = cache.get_or_insert_with(|| Cache::new(&self.tree, CacheOptions { threshold }));
         // The receivers the tiles will ask for: the same camera samples,
-        // traced the same way (`Frame::packet`).
+        // traced the same way (`Frame::packet`), those that gather
+        // irradiance alone and those with a lobe apart.
         let spp = self.opts.spp;
-        let per_tile: Vec<Vec<(Vec3, Vec3)>> = (0..self.tiles())
+        let per_tile: Vec<[Vec<(Vec3, Vec3)>; 2]> = (0..self.tiles())
             .into_par_iter()
             .with_max_len(1)
             .map(|tile| {
                 let pixels = self.tile_pixels(tile);
-                (0..spp)
-                    .flat_map(|s| self.packet(&pixels, s, None))
-                    .filter(|pp| !self.gathers_per_sample(pp.point.material))
-                    .map(|pp| (pp.point.position, pp.point.normal))
-                    .collect::<Vec<_>>()
+                let mut out = [Vec::new(), Vec::new()];
+                for pp in (0..spp).flat_map(|s| self.packet(&pixels, s, None)) {
+                    let m = pp.point.material;
+                    let place = (pp.point.position, pp.point.normal);
+                    if !self.gathers_per_sample(m) {
+                        out[0].push(place);
+                    } else if self.lobe_cached(m) {
+                        out[1].push(place);
+                    }
+                }
+                out
             })
             .collect();
-        let mut starts = Vec::with_capacity(per_tile.len() + 1);
-        starts.push(0);
-        for t in &per_tile {
-            starts.push(starts.last().copied().unwrap_or(0) + t.len());
-        }
-        let points: Vec<(Vec3, Vec3)> = per_tile.into_iter().flatten().collect();
-        let prepared = cache
-            .prepare(&points, gather, self.convolution())
-            .map_err(|e| match e {
-                CacheError::Gather(e) => RenderError::from(e),
-                CacheError::NonFinite { position, value } => RenderError::NonFinite {
-                    stage: "gather at a cache record",
-                    place: format!("the record at {position}"),
-                    value: value.to_array(),
-                },
-            })?;
+        let opts = |incident| CacheOptions { threshold, incident };
+        let cache = cache.get_or_insert_with(|| Cache::new(&self.tree, opts(false)));
+        let (settled, prepared) = settle(cache, per_tile.iter().map(|t| &t[0]), gather, self.convolution())?;
         timers.trav.add(prepared.trav);
         timers.shading.add(prepared.shading);
-        let marks = points.par_iter().map(|&(p, n)| Settled::mark(p, n)).collect();
+        let (mut stats, mut count) = (prepared.stats, prepared.records);
+        let lobes = match glossy {
+            Some(glossy) if per_tile.iter().any(|t| !t[1].is_empty()) => {
+                let c = lobes.get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
+                let (settled, prepared) =
+                    settle(c, per_tile.iter().map(|t| &t[1]), glossy, self.convolution())?;
+                timers.trav.add(prepared.trav);
+                timers.shading.add(prepared.shading);
+                stats.merge(&prepared.stats);
+                count += prepared.records;
+                Some(settled)
+            }
+            _ => None,
+        };
         Ok(Some(CacheGathers {
-            stats: prepared.stats,
-            count: prepared.records,
-            settled: Settled {
-                lookups: prepared.lookups,
-                marks,
-                starts,
-            },
+            stats,
+            count,
+            settled,
+            lobes,
         }))
     }
+}
+
+/// Has `cache` gather what the points of each tile (in tile order) need,
+/// and keeps what each settled on in that order.
+fn settle<'p>(
+    cache: &mut Cache,
+    per_tile: impl Iterator<Item = &'p Vec<(Vec3, Vec3)>>,
+    gather: &Gather,
+    what: Convolution,
+) -> Result<(Settled, Prepared), RenderError> {
+    let mut starts = vec![0];
+    let mut points = Vec::new();
+    for t in per_tile {
+        points.extend_from_slice(t);
+        starts.push(points.len());
+    }
+    let mut prepared = cache.prepare(&points, gather, what).map_err(|e| match e {
+        CacheError::Gather(e) => RenderError::from(e),
+        CacheError::NonFinite { position, value } => RenderError::NonFinite {
+            stage: "gather at a cache record",
+            place: format!("the record at {position}"),
+            value: value.to_array(),
+        },
+    })?;
+    let marks = points.par_iter().map(|&(p, n)| Settled::mark(p, n)).collect();
+    let settled = Settled {
+        lookups: std::mem::take(&mut prepared.lookups),
+        levels: std::mem::take(&mut prepared.levels),
+        marks,
+        starts,
+    };
+    Ok((settled, prepared))
 }

@@ -92,6 +92,9 @@ pub struct Frame<'s> {
     /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
     pub(super) cache: Mutex<Option<Cache>>,
+    /// The records of the receivers whose lobes take their light from the
+    /// cache (gathered at the glossy Ω and N, keeping their incident light).
+    pub(super) lobe_cache: Mutex<Option<Cache>>,
 }
 
 impl<'s> Frame<'s> {
@@ -193,6 +196,7 @@ impl<'s> Frame<'s> {
             needs_points,
             environment,
             cache: Mutex::new(None),
+            lobe_cache: Mutex::new(None),
         })
     }
 
@@ -476,8 +480,13 @@ impl<'s> Frame<'s> {
         let timers = Timers::default();
         let lattice = self.lattice(&gather, &timers)?;
         let mut cache = self.held_cache();
-        let cached = self.prepare_cache(&mut cache, &gather, &timers)?;
+        let mut lobe_cache = self
+            .lobe_cache
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let cached = self.prepare_cache(&mut cache, &mut lobe_cache, &gather, glossy.as_ref(), &timers)?;
         let shared = Self::shared(lattice.as_ref(), cached.as_ref());
+        let lobes = Self::lobes(cached.as_ref(), lobe_cache.as_ref());
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
@@ -490,6 +499,7 @@ impl<'s> Frame<'s> {
                     tile,
                     [&gather, glossy.as_ref().unwrap_or(&gather)],
                     shared.as_ref(),
+                    lobes.as_ref(),
                     &timers,
                 )?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;

@@ -142,6 +142,11 @@ pub struct RenderOptions {
     /// ([`CutOptions::light_offset`]): a lobe reads where a cluster's light
     /// is drawn.
     pub glossy_light_offset: f32,
+    /// With [`Gathers::Cache`], lobes at least this rough take their light
+    /// from the cache's records, which keep what their microbuffers saw
+    /// (`crate::cache::Cache::reflect`); smoother ones, nearer a mirror
+    /// than a record's pixels resolve, gather at each camera sample.
+    pub glossy_cache_roughness: f32,
     /// Indirect bounces: 0 direct only, 1 direct + one bounce (Mitsuba's `max_depth` 3), …
     pub bounces: u32,
     /// Camera samples per pixel (antialiasing; each a receiver of direct light).
@@ -317,6 +322,7 @@ impl Default for RenderOptions {
             glossy_max_solid_angle: 0.05,
             glossy_microbuffer: 24,
             glossy_light_offset: 4.0,
+            glossy_cache_roughness: 0.3,
             bounces: 1,
             spp: 4,
             gathers: Gathers::default(),

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::cached::Shared;
+use super::cached::{Lobes, Shared};
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
@@ -40,6 +40,7 @@ impl Frame<'_> {
         tile: usize,
         gathers: [&Gather; 2],
         shared: Option<&Shared>,
+        lobes: Option<&Lobes>,
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
         let opts = &self.opts;
@@ -62,6 +63,9 @@ impl Frame<'_> {
         // Samples that asked `shared`, in order: the cache's answers are
         // kept in that order.
         let mut asked = 0;
+        // The same for the lobe cache, and the light of the samples it
+        // served.
+        let (mut asked_lobes, mut reflected) = (0, Vec::new());
         for s in 0..opts.spp {
             let t0 = Instant::now();
             misses.clear();
@@ -87,6 +91,15 @@ impl Frame<'_> {
                 for pp in points {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
+                    if let Some(lobes) = lobes.filter(|_| per_sample && self.lobe_cached(sp.material)) {
+                        let l = lobes.light(self, (tile, asked_lobes), &pp)?;
+                        asked_lobes += 1;
+                        match l {
+                            Some(l) => reflected.push((s, pp, l)),
+                            None => own.push((s, pp, Group::Alone)),
+                        }
+                        continue;
+                    }
                     match shared.filter(|_| !per_sample) {
                         Some(l) => {
                             let from = l.irradiance((tile, asked), pp.film, sp.position, sp.normal, eye)?;
@@ -127,6 +140,18 @@ impl Frame<'_> {
                 let l = self.indirect(&pp, e, None);
                 if !l.is_finite() {
                     return Err(non_finite(stage, &pixels, &pp, s, l));
+                }
+                acc.adds[pp.pixel * spp + s as usize] += l;
+            }
+            for (s, pp, l) in reflected {
+                if !l.is_finite() {
+                    return Err(non_finite(
+                        "reflection of the cache's records",
+                        &pixels,
+                        &pp,
+                        s,
+                        l,
+                    ));
                 }
                 acc.adds[pp.pixel * spp + s as usize] += l;
             }

@@ -189,6 +189,10 @@ pub struct Settings {
     /// Microbuffer resolution of the gathers at receivers with a glossy lobe.
     #[arg(long, default_value_t = RenderOptions::default().glossy_microbuffer)]
     pub glossy_microbuffer: usize,
+    /// With --gathers cache: lobes at least this rough take their light
+    /// from the cache's records; smoother ones gather at each camera sample.
+    #[arg(long, default_value_t = RenderOptions::default().glossy_cache_roughness)]
+    pub glossy_cache_roughness: f32,
     /// Indirect bounces: 0 direct only, 1 = direct + one bounce (Mitsuba
     /// max_depth 3). Default: the scene file's max_depth, else 1.
     #[arg(long, value_parser = bounded_u32(0, MAX_BOUNCES), allow_negative_numbers = true)]
@@ -222,6 +226,7 @@ impl Settings {
             glossy_max_solid_angle: self.glossy_max_solid_angle,
             glossy_microbuffer: self.glossy_microbuffer,
             glossy_light_offset: self.glossy_light_offset,
+            glossy_cache_roughness: self.glossy_cache_roughness,
             bounces: self.bounces.unwrap_or(RenderOptions::default().bounces),
             spp,
             density: self.density.unwrap_or(RenderOptions::default().density),
