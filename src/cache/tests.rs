@@ -1,6 +1,7 @@
 use super::*;
 use crate::brdf::GlossyLobe;
 use crate::gather::GatherOptions;
+use crate::microbuffer::Gradients;
 use crate::{PointCloud, Surfel};
 
 /// A cache over `tree` with one level, whose cells hold `records` (each in

@@ -322,7 +322,7 @@ impl Default for RenderOptions {
             glossy_max_solid_angle: 0.05,
             glossy_microbuffer: 24,
             glossy_light_offset: 4.0,
-            glossy_cache_roughness: 0.3,
+            glossy_cache_roughness: 0.2,
             bounces: 1,
             spp: 4,
             gathers: Gathers::default(),
