@@ -32,8 +32,8 @@ fn bits(out: &RenderOutput) -> Vec<[u32; 3]> {
 }
 
 /// The small box with its floor and tall block glossy, as rough as the
-/// lobes the cache serves (and its back wall without its bumps, which
-/// gather at each sample).
+/// lobes the cache serves (and its back wall without its bumps, whose
+/// samples the cache serves where they lean less than a surface may).
 fn rough() -> Scene {
     let mut s = pbgi::scene::builtin::cornell_box_glossy();
     s.camera.width = 48;

@@ -47,7 +47,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::TraversalStats;
 use crate::error::Error;
 use crate::gather::Gather;
-use crate::microbuffer::{Convolution, Table, reflect};
+use crate::microbuffer::{Convolution, Table, reflect, tilted};
 use crate::simd::LANES;
 use crate::tree::Tree;
 use crate::tree::file::Fnv1a;
@@ -411,6 +411,30 @@ impl Cache {
     /// with the lobe in its own frame, weighted as the blend weighs it.
     /// Zero without [`CacheOptions::incident`].
     pub fn reflect(&self, p: Vec3, n: Vec3, level: u32, lobe: &GlossyLobe, shading: Vec3, wo: Vec3) -> Vec3 {
+        self.convolve(p, n, level, |t, normal, light| {
+            reflect(t, normal, light, lobe, shading, wo)
+        })
+    }
+
+    /// The irradiance at `p` (normal `n`, as asked of
+    /// [`prepare`](Self::prepare)) about the shading normal `shading` a
+    /// bump or normal map tilts it to, from the incident light of the
+    /// records it settled on at `level`, weighted as in
+    /// [`reflect`](Self::reflect). Zero without [`CacheOptions::incident`].
+    pub fn tilted(&self, p: Vec3, n: Vec3, level: u32, shading: Vec3) -> Vec3 {
+        self.convolve(p, n, level, |t, normal, light| tilted(t, normal, light, shading))
+    }
+
+    /// Whether the records keep their incident light (a cache read from
+    /// a file keeps none).
+    pub fn keeps_incident(&self) -> bool {
+        self.incident.is_some()
+    }
+
+    /// `f` (the table, a record's normal, its incident light) over the
+    /// records of `level` around `p` on its surface, in [`neighbours`]
+    /// order, weighted as a blend weighs them.
+    fn convolve(&self, p: Vec3, n: Vec3, level: u32, f: impl Fn(&Table, Vec3, &[Vec3]) -> Vec3) -> Vec3 {
         let (Some(all), Some(table)) = (&self.incident, &self.table) else {
             return Vec3::ZERO;
         };
@@ -431,8 +455,11 @@ impl Cache {
                 continue;
             }
             let w = (1.0 - d) * (1.0 - d);
-            let light = &all[i as usize * pixels..(i as usize + 1) * pixels];
-            sum += reflect(table, r.normal, light, lobe, shading, wo) * w;
+            sum += f(
+                table,
+                r.normal,
+                &all[i as usize * pixels..(i as usize + 1) * pixels],
+            ) * w;
             weight += w;
         }
         if weight > 0.0 { sum / weight } else { Vec3::ZERO }

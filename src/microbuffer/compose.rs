@@ -514,7 +514,7 @@ pub(crate) fn irradiance(
 /// sub-sample directions (each a sixteenth of its solid angle). Inlined
 /// into the shading clones, as everything they run.
 #[inline(always)]
-fn tilted_weights(t: &Table, n: Vec3, out: &mut Vec<f32>) {
+pub(super) fn tilted_weights(t: &Table, n: Vec3, out: &mut Vec<f32>) {
     out.clear();
     for (sub, omega) in t.sub.iter().zip(&t.solid_angle) {
         let count = sub[0].len();

@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::compose::{Scratch, Site};
+use super::compose::{Scratch, Site, tilted_weights};
 use super::open::Sky;
 use super::table::Table;
 use crate::brdf::GlossyLobe;
@@ -58,6 +58,23 @@ pub(crate) fn reflect(t: &Table, normal: Vec3, light: &[Vec3], lobe: &GlossyLobe
             let wi = x * d.x + y * d.y + z * d.z;
             e += *l * lobe.eval(n, wo, wi) * *w;
         }
+    }
+    if e.is_nan() { e } else { e.max(Vec3::ZERO) }
+}
+
+/// `Σ L·∫max(0, s·ω) dω` over the pixels `light` of a receiver facing
+/// `normal` (its [`incident`] light, table `t`): the irradiance about a
+/// shading normal `s` (world, unit) that a bump or normal map tilts, the
+/// pixels weighed as a gather tilted to `s` weighs them, none of it
+/// negative.
+pub(crate) fn tilted(t: &Table, normal: Vec3, light: &[Vec3], s: Vec3) -> Vec3 {
+    let [x, y, z] = basis(normal);
+    let local = Vec3::new(s.dot(x), s.dot(y), s.dot(z));
+    let mut weights = Vec::with_capacity(light.len());
+    tilted_weights(t, local, &mut weights);
+    let mut e = Vec3::ZERO;
+    for (l, w) in light.iter().zip(&weights) {
+        e += *l * *w;
     }
     if e.is_nan() { e } else { e.max(Vec3::ZERO) }
 }

@@ -52,7 +52,7 @@ mod tiles;
 
 pub use buffer::{MicroBuffer, MicroBufferSink};
 pub use gradients::Gradients;
-pub(crate) use incident::reflect;
+pub(crate) use incident::{reflect, tilted};
 pub use near::{NEAR_RADII, Near, NearField, Sight};
 pub use shade::{Convolution, PacketCut, shade_cuts, shade_packet};
 pub(crate) use shade::{shade_cuts_near, shade_packet_near};

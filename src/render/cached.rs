@@ -95,34 +95,55 @@ impl Settled {
     }
 }
 
-/// The cache of the receivers whose lobes take their light from records
-/// ([`Frame::lobe_cached`]), and what each of a frame's samples settled on.
-pub(crate) struct Lobes<'a> {
-    pub cache: &'a Cache,
-    pub settled: &'a Settled,
+/// The caches whose records keep their incident light, by what they
+/// serve: samples whose bump or normal map tilts the irradiance
+/// ([`TILTED`], gathered at the render's Ω and N), and samples with a
+/// lobe ([`LOBED`], at the glossy Ω and N). Neither is written to a cache
+/// file: each frame of a run rebuilds what it lacks, so a run from a file
+/// keeps the bits of one from scratch.
+pub(crate) type IncidentCaches = [Option<Cache>; 2];
+
+/// The incident cache of tilted samples.
+pub(crate) const TILTED: usize = 0;
+/// The incident cache of samples with a lobe.
+pub(crate) const LOBED: usize = 1;
+
+/// The incident caches and what each of a frame's samples settled on.
+pub(crate) struct Incident<'a> {
+    served: [Option<(&'a Cache, &'a Settled)>; 2],
 }
 
-impl Lobes<'_> {
-    /// The indirect light camera sample `pp`, the `nth` of tile `tile`
-    /// to ask, reflects (its diffuse part from the records' blended
-    /// irradiance, its lobe convolved with their incident light), or
-    /// `None` where it gathers itself.
+impl Incident<'_> {
+    /// The indirect light camera sample `pp`, the `nth` of tile `tile` to
+    /// ask incident cache `which`, reflects, or `None` where it gathers
+    /// itself: its diffuse part from the records' blended irradiance (or
+    /// their incident light about its tilted normal), its lobe convolved
+    /// with their incident light, both about the normal it gathers about,
+    /// as its own gather would.
     pub fn light(
         &self,
         frame: &Frame,
+        which: usize,
         (tile, nth): (usize, usize),
         pp: &PacketPoint,
     ) -> Result<Option<Vec3>, RenderError> {
+        let Some((cache, settled)) = self.served[which] else {
+            return Ok(None);
+        };
         let sp = &pp.point;
-        let (lookup, level) = self.settled.get(tile, nth, sp.position, sp.normal)?;
+        let (p, n) = (sp.position, sp.receiver_normal);
+        let (lookup, level) = settled.get(tile, nth, p, n)?;
         let Lookup::Light(e) = lookup else {
             return Ok(None);
         };
+        let e = if sp.normal == n {
+            e
+        } else {
+            cache.tilted(p, n, level, sp.normal)
+        };
         let mut l = sp.albedo * std::f32::consts::FRAC_1_PI * e;
         if let Some(lobe) = frame.scene.materials[sp.material].lobe() {
-            l += self
-                .cache
-                .reflect(sp.position, sp.normal, level, &lobe, sp.normal, sp.wo);
+            l += cache.reflect(p, n, level, &lobe, n, sp.wo);
         }
         Ok(Some(l))
     }
@@ -133,8 +154,8 @@ pub(crate) struct CacheGathers {
     pub stats: TraversalStats,
     pub count: usize,
     pub settled: Settled,
-    /// The same for the samples whose lobes the cache serves.
-    pub lobes: Option<Settled>,
+    /// The same for the samples the incident caches serve.
+    pub incident: [Option<Settled>; 2],
 }
 
 impl Frame<'_> {
@@ -255,38 +276,37 @@ impl Frame<'_> {
         }
     }
 
-    /// What the lobe cache serves: its records and what the frame's
-    /// samples settled on, where it gathered for them.
-    pub(crate) fn lobes<'a>(cached: Option<&'a CacheGathers>, cache: Option<&'a Cache>) -> Option<Lobes<'a>> {
-        Some(Lobes {
-            cache: cache?,
-            settled: cached?.lobes.as_ref()?,
-        })
+    /// What the incident caches serve: their records and what the
+    /// frame's samples settled on, where they gathered for them.
+    pub(crate) fn incident<'a>(cached: Option<&'a CacheGathers>, caches: &'a IncidentCaches) -> Incident<'a> {
+        let served = [TILTED, LOBED].map(|i| Some((caches[i].as_ref()?, cached?.incident[i].as_ref()?)));
+        Incident { served }
     }
 
-    /// Whether camera samples of `material` take their light from the
-    /// lobe cache: with the cache, a glossy lobe at least
+    /// Which incident cache serves camera samples of `material`, if any:
+    /// with the cache, [`LOBED`] for a glossy lobe at least
     /// [`glossy_cache_roughness`](super::RenderOptions::glossy_cache_roughness)
-    /// rough on a surface without bump or normal map.
-    pub(crate) fn lobe_cached(&self, material: usize) -> bool {
+    /// rough, [`TILTED`] for a diffuse surface with a bump or normal map.
+    pub(crate) fn incident_cache(&self, material: usize) -> Option<usize> {
         let m = &self.scene.materials[material];
-        matches!(self.opts.gathers, Gathers::Cache { .. })
-            && self.glossy_apart()
-            && m.bump.is_none()
-            && m.normal_map.is_none()
-            && m.glossy
-                .is_some_and(|g| g.roughness >= self.opts.glossy_cache_roughness)
+        if !matches!(self.opts.gathers, Gathers::Cache { .. }) || self.opts.ao {
+            return None;
+        }
+        match m.glossy {
+            Some(g) => (g.roughness >= self.opts.glossy_cache_roughness).then_some(LOBED),
+            None => (m.bump.is_some() || m.normal_map.is_some()).then_some(TILTED),
+        }
     }
 
     /// Gathers into `cache` (made here on a frame's first render with the
-    /// cache) the records the window's camera samples need, and into
-    /// `lobes` (with `glossy`, the gather at the glossy Ω and N) those its
-    /// samples with lobes the cache serves need; `None` unless the render
-    /// gathers through the cache.
+    /// cache) the records the window's camera samples need, and into the
+    /// incident caches those of the samples they serve (the lobed ones
+    /// with `glossy`, the gather at the glossy Ω and N); `None` unless the
+    /// render gathers through the cache.
     pub(crate) fn prepare_cache(
         &self,
         cache: &mut Option<Cache>,
-        lobes: &mut Option<Cache>,
+        incident: &mut IncidentCaches,
         gather: &Gather,
         glossy: Option<&Gather>,
         timers: &Timers,
@@ -298,22 +318,22 @@ impl Frame<'_> {
             return Ok(None);
         }
         // The receivers the tiles will ask for: the same camera samples,
-        // traced the same way (`Frame::packet`), those that gather
-        // irradiance alone and those with a lobe apart.
+        // traced the same way (`Frame::packet`), those that take the
+        // irradiance alone and those each incident cache serves (by the
+        // normal they gather about).
         let spp = self.opts.spp;
-        let per_tile: Vec<[Vec<(Vec3, Vec3)>; 2]> = (0..self.tiles())
+        let per_tile: Vec<[Vec<(Vec3, Vec3)>; 3]> = (0..self.tiles())
             .into_par_iter()
             .with_max_len(1)
             .map(|tile| {
                 let pixels = self.tile_pixels(tile);
-                let mut out = [Vec::new(), Vec::new()];
+                let mut out = [Vec::new(), Vec::new(), Vec::new()];
                 for pp in (0..spp).flat_map(|s| self.packet(&pixels, s, None)) {
-                    let m = pp.point.material;
-                    let place = (pp.point.position, pp.point.normal);
+                    let (m, sp) = (pp.point.material, &pp.point);
                     if !self.gathers_per_sample(m) {
-                        out[0].push(place);
-                    } else if self.lobe_cached(m) {
-                        out[1].push(place);
+                        out[0].push((sp.position, sp.normal));
+                    } else if let Some(i) = self.incident_cache(m) {
+                        out[1 + i].push((sp.position, sp.receiver_normal));
                     }
                 }
                 out
@@ -325,24 +345,24 @@ impl Frame<'_> {
         timers.trav.add(prepared.trav);
         timers.shading.add(prepared.shading);
         let (mut stats, mut count) = (prepared.stats, prepared.records);
-        let lobes = match glossy {
-            Some(glossy) if per_tile.iter().any(|t| !t[1].is_empty()) => {
-                let c = lobes.get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
-                let (settled, prepared) =
-                    settle(c, per_tile.iter().map(|t| &t[1]), glossy, self.convolution())?;
-                timers.trav.add(prepared.trav);
-                timers.shading.add(prepared.shading);
-                stats.merge(&prepared.stats);
-                count += prepared.records;
-                Some(settled)
-            }
-            _ => None,
-        };
+        let mut served = [None, None];
+        for (i, g) in [(TILTED, Some(gather)), (LOBED, glossy)] {
+            let Some(g) = g.filter(|_| per_tile.iter().any(|t| !t[1 + i].is_empty())) else {
+                continue;
+            };
+            let c = incident[i].get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
+            let (settled, prepared) = settle(c, per_tile.iter().map(|t| &t[1 + i]), g, self.convolution())?;
+            timers.trav.add(prepared.trav);
+            timers.shading.add(prepared.shading);
+            stats.merge(&prepared.stats);
+            count += prepared.records;
+            served[i] = Some(settled);
+        }
         Ok(Some(CacheGathers {
             stats,
             count,
             settled,
-            lobes,
+            incident: served,
         }))
     }
 }

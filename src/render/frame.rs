@@ -92,9 +92,9 @@ pub struct Frame<'s> {
     /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
     pub(super) cache: Mutex<Option<Cache>>,
-    /// The records of the receivers whose lobes take their light from the
-    /// cache (gathered at the glossy Ω and N, keeping their incident light).
-    pub(super) lobe_cache: Mutex<Option<Cache>>,
+    /// The records that keep their incident light, for the samples whose
+    /// bump or normal map tilts them and those with lobes.
+    pub(super) incident_caches: Mutex<[Option<Cache>; 2]>,
 }
 
 impl<'s> Frame<'s> {
@@ -196,7 +196,7 @@ impl<'s> Frame<'s> {
             needs_points,
             environment,
             cache: Mutex::new(None),
-            lobe_cache: Mutex::new(None),
+            incident_caches: Mutex::new([None, None]),
         })
     }
 
@@ -480,13 +480,13 @@ impl<'s> Frame<'s> {
         let timers = Timers::default();
         let lattice = self.lattice(&gather, &timers)?;
         let mut cache = self.held_cache();
-        let mut lobe_cache = self
-            .lobe_cache
+        let mut incident = self
+            .incident_caches
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let cached = self.prepare_cache(&mut cache, &mut lobe_cache, &gather, glossy.as_ref(), &timers)?;
+        let cached = self.prepare_cache(&mut cache, &mut incident, &gather, glossy.as_ref(), &timers)?;
         let shared = Self::shared(lattice.as_ref(), cached.as_ref());
-        let lobes = Self::lobes(cached.as_ref(), lobe_cache.as_ref());
+        let incident = Self::incident(cached.as_ref(), &incident);
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
@@ -499,7 +499,7 @@ impl<'s> Frame<'s> {
                     tile,
                     [&gather, glossy.as_ref().unwrap_or(&gather)],
                     shared.as_ref(),
-                    lobes.as_ref(),
+                    &incident,
                     &timers,
                 )?;
                 let d = done.fetch_add(1, Ordering::Relaxed) + 1;

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::cached::{Lobes, Shared};
+use super::cached::{Incident, Shared};
 use super::frame::{Frame, PacketPoint, TileResult, Timers};
 use super::options::Component;
 use super::output::RenderError;
@@ -40,7 +40,7 @@ impl Frame<'_> {
         tile: usize,
         gathers: [&Gather; 2],
         shared: Option<&Shared>,
-        lobes: Option<&Lobes>,
+        incident: &Incident,
         timers: &Timers,
     ) -> Result<TileResult, RenderError> {
         let opts = &self.opts;
@@ -65,7 +65,7 @@ impl Frame<'_> {
         let mut asked = 0;
         // The same for the lobe cache, and the light of the samples it
         // served.
-        let (mut asked_lobes, mut reflected) = (0, Vec::new());
+        let (mut asked_incident, mut reflected) = ([0; 2], Vec::new());
         for s in 0..opts.spp {
             let t0 = Instant::now();
             misses.clear();
@@ -91,9 +91,9 @@ impl Frame<'_> {
                 for pp in points {
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
-                    if let Some(lobes) = lobes.filter(|_| per_sample && self.lobe_cached(sp.material)) {
-                        let l = lobes.light(self, (tile, asked_lobes), &pp)?;
-                        asked_lobes += 1;
+                    if let Some(i) = self.incident_cache(sp.material).filter(|_| per_sample) {
+                        let l = incident.light(self, i, (tile, asked_incident[i]), &pp)?;
+                        asked_incident[i] += 1;
                         match l {
                             Some(l) => reflected.push((s, pp, l)),
                             None => own.push((s, pp, Group::Alone)),
