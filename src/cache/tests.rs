@@ -1,5 +1,6 @@
 use super::*;
 use crate::brdf::GlossyLobe;
+use crate::cut::Receiver;
 use crate::gather::GatherOptions;
 use crate::microbuffer::Gradients;
 use crate::{PointCloud, Surfel};
@@ -400,9 +401,10 @@ fn a_cache_file_gives_back_its_records_and_refuses_a_damaged_or_foreign_one() {
 }
 
 /// A record that keeps its incident light reflects it through a lobe, at
-/// its own place and normal, exactly as a glossy gather there does: the
-/// same pixels, directions and weights, bit for bit (no sky here, whose
-/// sum a gather holds at least zero).
+/// its own place and normal, exactly as a glossy gather there does, and
+/// weighs it about a tilted normal as a tilted gather does: the same
+/// pixels, directions and weights, bit for bit (no sky here, whose sum a
+/// gather holds at least zero).
 #[test]
 fn a_records_incident_light_reflects_a_lobe_as_its_own_gather_does() {
     // The corner with its floor lit: the wall sees it.
@@ -484,6 +486,18 @@ fn a_records_incident_light_reflects_a_lobe_as_its_own_gather_does() {
             r.position
         );
         lit += usize::from(want.min_element() > 0.0);
+        // Its irradiance about a normal a map tilts: a tilted gather's.
+        let tilt = (r.normal + Vec3::new(0.2, -0.4, 0.3)).normalize();
+        let mut g = gather.gatherer();
+        g.cut(&[Receiver::new(r.position, r.normal).unwrap()]).unwrap();
+        let want = g.shade_tilted(Convolution::Irradiance, [tilt].into_iter())[0];
+        let got = tilted(&table, r.normal, &all[i * pixels..(i + 1) * pixels], tilt);
+        assert_eq!(
+            got.to_array().map(f32::to_bits),
+            want.to_array().map(f32::to_bits),
+            "tilted at {}",
+            r.position
+        );
     }
     assert!(lit > 0, "no wall record saw the lit floor");
 }
