@@ -431,9 +431,11 @@ impl Cache {
         self.incident.is_some()
     }
 
-    /// `f` (the table, a record's normal, its incident light) over the
-    /// records of `level` around `p` on its surface, in [`neighbours`]
-    /// order, weighted as a blend weighs them.
+    /// `f` (the table, a normal, incident light) over the records of
+    /// `level` around `p` on its surface, weighted as a blend weighs
+    /// them. Records that face exactly one way (a flat surface's) share a
+    /// frame, so their light is summed, weighted, before `f` reads it
+    /// once; the groups and the sums follow [`neighbours`] order.
     fn convolve(&self, p: Vec3, n: Vec3, level: u32, f: impl Fn(&Table, Vec3, &[Vec3]) -> Vec3) -> Vec3 {
         let (Some(all), Some(table)) = (&self.incident, &self.table) else {
             return Vec3::ZERO;
@@ -443,7 +445,8 @@ impl Cache {
         };
         let pixels = table.dir.len();
         let h = self.grid.cell_size(level);
-        let (mut sum, mut weight) = (Vec3::ZERO, 0.0);
+        let mut near = [(0u32, 0.0f32); 27];
+        let mut len = 0;
         for k in neighbours(c, level, facing(n)) {
             let Some(&i) = self.cells.get(&k) else { continue };
             if i == NONE {
@@ -451,16 +454,42 @@ impl Cache {
             }
             let r = &self.records[i as usize];
             let d = (r.position - p).length() / h;
-            if d >= 1.0 || !r.covers(p, n, self.slack) {
+            if d < 1.0 && r.covers(p, n, self.slack) {
+                near[len] = (i, (1.0 - d) * (1.0 - d));
+                len += 1;
+            }
+        }
+        let near = &near[..len];
+        let light = |i: u32| &all[i as usize * pixels..(i as usize + 1) * pixels];
+        let normal = |i: u32| self.records[i as usize].normal;
+        let (mut sum, mut weight) = (Vec3::ZERO, 0.0);
+        let mut done = [false; 27];
+        let mut mixed = Vec::new();
+        for a in 0..near.len() {
+            if done[a] {
                 continue;
             }
-            let w = (1.0 - d) * (1.0 - d);
-            sum += f(
-                table,
-                r.normal,
-                &all[i as usize * pixels..(i as usize + 1) * pixels],
-            ) * w;
+            let (i, w) = near[a];
+            let same: Vec<usize> = (a + 1..near.len())
+                .filter(|&b| !done[b] && normal(near[b].0) == normal(i))
+                .collect();
+            if same.is_empty() {
+                sum += f(table, normal(i), light(i)) * w;
+                weight += w;
+                continue;
+            }
+            mixed.clear();
+            mixed.extend(light(i).iter().map(|l| *l * w));
             weight += w;
+            for b in same {
+                done[b] = true;
+                let (j, v) = near[b];
+                for (m, l) in mixed.iter_mut().zip(light(j)) {
+                    *m += *l * v;
+                }
+                weight += v;
+            }
+            sum += f(table, normal(i), &mixed);
         }
         if weight > 0.0 { sum / weight } else { Vec3::ZERO }
     }
