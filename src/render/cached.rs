@@ -322,7 +322,7 @@ impl Frame<'_> {
         // irradiance alone and those each incident cache serves (by the
         // normal they gather about).
         let spp = self.opts.spp;
-        let per_tile: Vec<[Vec<(Vec3, Vec3)>; 3]> = (0..self.tiles())
+        let mut per_tile: Vec<[Vec<(Vec3, Vec3)>; 3]> = (0..self.tiles())
             .into_par_iter()
             .with_max_len(1)
             .map(|tile| {
@@ -341,7 +341,12 @@ impl Frame<'_> {
             .collect();
         let opts = |incident| CacheOptions { threshold, incident };
         let cache = cache.get_or_insert_with(|| Cache::new(&self.tree, opts(false)));
-        let (settled, prepared) = settle(cache, per_tile.iter().map(|t| &t[0]), gather, self.convolution())?;
+        let (settled, prepared) = settle(
+            cache,
+            per_tile.iter_mut().map(|t| std::mem::take(&mut t[0])),
+            gather,
+            self.convolution(),
+        )?;
         timers.trav.add(prepared.trav);
         timers.shading.add(prepared.shading);
         let (mut stats, mut count) = (prepared.stats, prepared.records);
@@ -351,7 +356,12 @@ impl Frame<'_> {
                 continue;
             };
             let c = incident[i].get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
-            let (settled, prepared) = settle(c, per_tile.iter().map(|t| &t[1 + i]), g, self.convolution())?;
+            let (settled, prepared) = settle(
+                c,
+                per_tile.iter_mut().map(|t| std::mem::take(&mut t[1 + i])),
+                g,
+                self.convolution(),
+            )?;
             timers.trav.add(prepared.trav);
             timers.shading.add(prepared.shading);
             stats.merge(&prepared.stats);
@@ -368,17 +378,18 @@ impl Frame<'_> {
 }
 
 /// Has `cache` gather what the points of each tile (in tile order) need,
-/// and keeps what each settled on in that order.
-fn settle<'p>(
+/// and keeps what each settled on in that order. Each tile's list is
+/// dropped once copied: a frame's points are most of its memory.
+fn settle(
     cache: &mut Cache,
-    per_tile: impl Iterator<Item = &'p Vec<(Vec3, Vec3)>>,
+    per_tile: impl Iterator<Item = Vec<(Vec3, Vec3)>>,
     gather: &Gather,
     what: Convolution,
 ) -> Result<(Settled, Prepared), RenderError> {
     let mut starts = vec![0];
     let mut points = Vec::new();
     for t in per_tile {
-        points.extend_from_slice(t);
+        points.extend_from_slice(&t);
         starts.push(points.len());
     }
     let mut prepared = cache.prepare(&points, gather, what).map_err(|e| match e {
