@@ -480,13 +480,19 @@ impl<'s> Frame<'s> {
         let timers = Timers::default();
         let lattice = self.lattice(&gather, &timers)?;
         let mut cache = self.held_cache();
-        let mut incident = self
+        let mut incident_caches = self
             .incident_caches
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let cached = self.prepare_cache(&mut cache, &mut incident, &gather, glossy.as_ref(), &timers)?;
+        let cached = self.prepare_cache(
+            &mut cache,
+            &mut incident_caches,
+            &gather,
+            glossy.as_ref(),
+            &timers,
+        )?;
         let shared = Self::shared(lattice.as_ref(), cached.as_ref());
-        let incident = Self::incident(cached.as_ref(), &incident);
+        let incident = Self::incident(cached.as_ref(), &incident_caches);
 
         // Every tile its own job: rayon's default split ran a quarter of
         // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
@@ -520,7 +526,11 @@ impl<'s> Frame<'s> {
             stats.merge(&c.stats);
             receivers += c.count;
             records = c.count;
-            held = cache.as_ref().map_or(0, |c| c.len());
+            held = cache
+                .iter()
+                .chain(incident_caches.iter().flatten())
+                .map(Cache::len)
+                .sum();
         }
         for (out, st, n) in tiles {
             for (i, c) in out {

@@ -76,7 +76,8 @@ pub struct RenderOutput {
     /// (`Gathers::Cache`; 0 otherwise, and in a later frame that found
     /// every record it needed).
     pub records: usize,
-    /// Records the cache holds after this frame.
+    /// Records the caches hold after this frame (the irradiance cache and
+    /// those that keep their incident light).
     pub cached: usize,
     /// Every stage, run or left out.
     pub stages: Vec<Stage>,
