@@ -425,12 +425,6 @@ impl Cache {
         self.convolve(p, n, level, |t, normal, light| tilted(t, normal, light, shading))
     }
 
-    /// Whether the records keep their incident light (a cache read from
-    /// a file keeps none).
-    pub fn keeps_incident(&self) -> bool {
-        self.incident.is_some()
-    }
-
     /// `f` (the table, a normal, incident light) over the records of
     /// `level` around `p` on its surface, weighted as a blend weighs
     /// them. Records that face exactly one way (a flat surface's) share a
@@ -445,17 +439,12 @@ impl Cache {
         };
         let pixels = table.dir.len();
         let h = self.grid.cell_size(level);
+        let mut around = Around::default();
         let mut near = [(0u32, 0.0f32); 27];
         let mut len = 0;
-        for k in neighbours(c, level, facing(n)) {
-            let Some(&i) = self.cells.get(&k) else { continue };
-            if i == NONE {
-                continue;
-            }
-            let r = &self.records[i as usize];
-            let d = (r.position - p).length() / h;
-            if d < 1.0 && r.covers(p, n, self.slack) {
-                near[len] = (i, (1.0 - d) * (1.0 - d));
+        for &i in self.records_around(c, level, facing(n), &mut around) {
+            if let Some(w) = self.weight(&self.records[i as usize], p, n, h) {
+                near[len] = (i, w);
                 len += 1;
             }
         }
@@ -470,17 +459,18 @@ impl Cache {
                 continue;
             }
             let (i, w) = near[a];
-            let same: Vec<usize> = (a + 1..near.len())
-                .filter(|&b| !done[b] && normal(near[b].0) == normal(i))
-                .collect();
-            if same.is_empty() {
+            weight += w;
+            // Later records of the same normal: none of them is done, or
+            // `a` would be.
+            let mut same = (a + 1..near.len())
+                .filter(|&b| normal(near[b].0) == normal(i))
+                .peekable();
+            if same.peek().is_none() {
                 sum += f(table, normal(i), light(i)) * w;
-                weight += w;
                 continue;
             }
             mixed.clear();
             mixed.extend(light(i).iter().map(|l| *l * w));
-            weight += w;
             for b in same {
                 done[b] = true;
                 let (j, v) = near[b];
@@ -512,15 +502,11 @@ impl Cache {
         })
     }
 
-    /// The records of `level` around `p` on its surface, blended, in
-    /// [`neighbours`] order (so the sums' bits do not depend on `near`).
+    /// The records of the 27 cells around cell `c` of `level` for facing
+    /// `f`, in [`neighbours`] order, kept in `near` for the next point of
+    /// the same cell and facing.
     #[inline]
-    fn blend(&self, p: Vec3, n: Vec3, level: u32, near: &mut Around) -> Blend {
-        let mut b = Blend::empty();
-        let Some(c) = self.grid.cell(p, level) else {
-            return b;
-        };
-        let f = facing(n);
+    fn records_around<'a>(&self, c: [u32; 3], level: u32, f: u8, near: &'a mut Around) -> &'a [u32] {
         let own = key(c, level, f);
         if near.key != Some(own) {
             near.key = Some(own);
@@ -534,16 +520,34 @@ impl Cache {
                 }
             }
         }
+        &near.records[..near.len]
+    }
+
+    /// The weight of record `r` in a blend at `p` (unit normal `n`), cells
+    /// `h` across: `(1 − d/h)²` where it lies within a cell's side on the
+    /// point's surface, else none.
+    #[inline]
+    fn weight(&self, r: &Record, p: Vec3, n: Vec3, h: f32) -> Option<f32> {
+        let d = (r.position - p).length() / h;
+        (d < 1.0 && r.covers(p, n, self.slack)).then_some((1.0 - d) * (1.0 - d))
+    }
+
+    /// The records of `level` around `p` on its surface, blended, in
+    /// [`neighbours`] order (so the sums' bits do not depend on `near`).
+    #[inline]
+    fn blend(&self, p: Vec3, n: Vec3, level: u32, near: &mut Around) -> Blend {
+        let mut b = Blend::empty();
+        let Some(c) = self.grid.cell(p, level) else {
+            return b;
+        };
         let h = self.grid.cell_size(level);
         let (t, bt) = n.any_orthonormal_pair();
-        for &i in &near.records[..near.len] {
+        for &i in self.records_around(c, level, facing(n), near) {
             let r = &self.records[i as usize];
-            let off = r.position - p;
-            let d = off.length() / h;
-            if d >= 1.0 || !r.covers(p, n, self.slack) {
+            let Some(w) = self.weight(r, p, n, h) else {
                 continue;
-            }
-            let w = (1.0 - d) * (1.0 - d);
+            };
+            let off = r.position - p;
             let e = r.turned(n);
             b.sum += e * w;
             b.weight += w;

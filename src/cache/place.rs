@@ -2,7 +2,6 @@
 //! candidate surfel, and the records of a level's cells gathered in
 //! packets of 16 neighbours of one facing, with what each keeps.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -12,7 +11,7 @@ use super::grid::{Grid, Key, cell_of};
 use super::{Cache, CacheError, NONE, Prepared, Record, facing};
 use crate::cut::Receiver;
 use crate::gather::Gather;
-use crate::microbuffer::{Convolution, Gradients};
+use crate::microbuffer::{Convolution, Gradients, Table};
 use crate::simd::LANES;
 
 impl Cache {
@@ -49,6 +48,11 @@ impl Cache {
         // packet's receivers face one way and share most of their cuts.
         let asked: Vec<(Vec3, Vec3)> = found.iter().flatten().copied().collect();
         let keep = self.incident.is_some();
+        if keep {
+            // The table of the gather's buffers (one per resolution).
+            self.table
+                .get_or_insert_with(|| Table::shared(gather.options().microbuffer));
+        }
         let packets = asked
             .par_chunks(LANES)
             .map_init(
@@ -86,7 +90,7 @@ impl Cache {
                                 Convolution::Irradiance => b.incident(&mut l),
                                 Convolution::Occlusion => l.resize(b.pixels(), Vec3::ZERO),
                             }
-                            seen.push((l, Arc::clone(b.table())));
+                            seen.push(l);
                         }
                     }
                     let e: Vec<(Vec3, Gradients)> = e.into_iter().zip(slopes).collect();
@@ -112,13 +116,10 @@ impl Cache {
                 }
                 light.push((e, g));
             }
-            for ((&(position, _), (l, table)), &(e, _)) in
-                chunk.iter().zip(seen).zip(&light[light.len() - chunk.len()..])
-            {
-                if !l.iter().all(|v| v.is_finite()) {
-                    return Err(CacheError::NonFinite { position, value: e });
+            for (&(position, _), l) in chunk.iter().zip(seen) {
+                if let Some(&value) = l.iter().find(|v| !v.is_finite()) {
+                    return Err(CacheError::NonFinite { position, value });
                 }
-                self.table.get_or_insert(table);
                 seen_all.push(l);
             }
         }

@@ -297,11 +297,6 @@ impl MicroBuffer {
         incident::incident(&self.scratch, &self.site(), self.sky().as_ref(), &self.table, out);
     }
 
-    /// The buffer's table of pixels.
-    pub(crate) fn table(&self) -> &Arc<Table> {
-        &self.table
-    }
-
     /// Glossy reflection towards `wo` (world, unit):
     /// `Σ L·f_s(ωi, ωo)·∫cosθ dω` over the composed pixels (and the
     /// environment through the open ones), `ωi` the pixel centre.

@@ -63,8 +63,8 @@ impl Frame<'_> {
         // Samples that asked `shared`, in order: the cache's answers are
         // kept in that order.
         let mut asked = 0;
-        // The same for the lobe cache, and the light of the samples it
-        // served.
+        // The same for each incident cache, and the light of the samples
+        // they served.
         let (mut asked_incident, mut reflected) = ([0; 2], Vec::new());
         for s in 0..opts.spp {
             let t0 = Instant::now();
