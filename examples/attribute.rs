@@ -15,7 +15,7 @@
 //! ```
 //!
 //! The normal defaults to +y; irradiance is the mean of the three channels.
-//! BENCHMARKS.md, "The nave's indirect bias", used it on the nave's floor.
+//! docs/lab/BENCHMARKS.md, "The nave's indirect bias", used it on the nave's floor.
 
 use std::collections::{HashMap, HashSet};
 

@@ -5,7 +5,7 @@
 //! 0.85 lets a curved surface's neighbouring facets count), the nearest one
 //! measured in its own radii; prints per mesh the share of area farther
 //! than 1, √2 and √3 radii (a disk of its area, and the disks grown ×2 and
-//! ×3 as the hiding grows them, `microbuffer/samples.rs`). BENCHMARKS.md,
+//! ×3 as the hiding grows them, `microbuffer/samples.rs`). docs/lab/BENCHMARKS.md,
 //! "Both cores to the end, and surfels on a plane's lattice", used it.
 //!
 //! ```text

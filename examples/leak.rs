@@ -15,7 +15,7 @@
 //! measured with every occluder still in place. Irradiance is the mean of
 //! the three channels. Each Ω and N is gathered with the surfels alone and
 //! with the renderer's near field (rays within three surfel radii; not with
-//! `--lit`). BENCHMARKS.md, "The nave's indirect bias", used it on the
+//! `--lit`). docs/lab/BENCHMARKS.md, "The nave's indirect bias", used it on the
 //! nave's window jambs, and "Sponza's error floor" on receivers just above
 //! a sunlit ledge.
 
@@ -167,7 +167,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     rows[0] += &truth.iter().map(|e| format!(" | {e:.5}")).collect::<String>();
     // The share of that light from surfaces within two and four surfel
-    // radii: where disks stand for the surface worst (BENCHMARKS.md,
+    // radii: where disks stand for the surface worst (docs/lab/BENCHMARKS.md,
     // "Sponza's error floor").
     rows.push(format!(
         "from within 2r / 4r ({:.1} / {:.1} mm)",

@@ -12,7 +12,7 @@
 //! the scalar one, the only one that convolves it): the error at the render
 //! defaults ≤ 3 %, at the finest setting ≤ 1 %; it falls as Ω → 0 and as
 //! the density grows; the mean bias stays within ±1 % at every N from 8 to
-//! 64. Figures: BENCHMARKS.md, "The gather against exact answers" (`cargo
+//! 64. Figures: docs/lab/BENCHMARKS.md, "The gather against exact answers" (`cargo
 //! run --release --example exact`).
 
 use glam::Vec3;

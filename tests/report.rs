@@ -248,7 +248,7 @@ fn the_csv_reads_back_what_it_wrote() {
     );
 }
 
-/// The committed reports (`pbgi report`, docs/guide.md) read back and write the
+/// The committed reports (`pbgi report`, docs/accuracy.md) read back and write the
 /// same CSV; the same with the `floor` column cut off (the nine fields
 /// written before points kept their floor) reads with floor 0.
 #[test]

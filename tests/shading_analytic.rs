@@ -164,7 +164,7 @@ fn facing_a_square_irradiance_is_pi_l_times_its_form_factor() {
     // so the cap at πL, which a square filling the hemisphere would read,
     // plays no part). The disks' rim ramps once overstated them: +3.3 %
     // at N 12 and 16 (mean of these receivers), +8 % at N 24; now −0.2 and
-    // −0.7 %. Above N 16 an erratic ±2 % is left (docs/exact/findings.md).
+    // −0.7 %. Above N 16 an erratic ±2 % is left (docs/lab/exact/findings.md).
     let (side, h) = (2.0f64, 0.5f64);
     let tree = square(side as f32, 20);
     let receivers: Vec<(f64, f64)> = (0..8)
@@ -262,7 +262,7 @@ fn a_dark_box_in_front_of_a_lit_square_hides_it_at_every_resolution() {
     // +1.2 / +1.1 % at N 48 / 96; as the disks of their facets on their
     // planes, +0.8 / +0.8 % (+1.0 % at N 24, +1.4 % before).
     // The Cornell box's floor, seen past the blocks, was +6.8 % too bright
-    // at N 48 (docs/guide.md, "Facets on their planes").
+    // at N 48 (docs/lab/BENCHMARKS.md, "Facets on their planes").
     let (side, top, height, h) = (2.0f32, 0.5f32, 0.2f32, 0.8f64);
     let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
     let c = Vec3::new(-top / 2.0, -top / 2.0, 0.0);

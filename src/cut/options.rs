@@ -49,7 +49,7 @@ impl fmt::Display for Scheme {
 pub const AUTO_SINGLE_BELOW: usize = 6;
 
 /// The scheme the `auto` choice runs on one packet of `receivers` receivers:
-/// [`Scheme::Packet`], the fastest on every scene measured (BENCHMARKS.md,
+/// [`Scheme::Packet`], the fastest on every scene measured (docs/lab/BENCHMARKS.md,
 /// the glossy and bump ones included, where hybrid's switching cost more than
 /// it saved; and on the world-space cache's records, whose packets keep
 /// about half their lanes busy, `docs/lab/cache.md`), and [`Scheme::Single`] for packets too sparse to fill lanes

@@ -41,7 +41,7 @@
 //! [0, 1]. Glossy radiance is `∫ L f_s cosθ dω` for the given lobe.
 //!
 //! **Choosing Ω and N.** Measured against closed-form answers in convex
-//! rooms (`cargo run --release --example exact`; BENCHMARKS.md, ~10⁵
+//! rooms (`cargo run --release --example exact`; docs/lab/BENCHMARKS.md, ~10⁵
 //! surfels, one thread), the relative RMSE of receivers mid-surface:
 //!
 //! | Ω (`cut.max_solid_angle`) | N (`microbuffer`) | irradiance | glossy (α 0.3) | µs per receiver |

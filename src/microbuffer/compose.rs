@@ -27,7 +27,7 @@
 //! floor behind it (the Cornell box's indirect light +1.4 % too bright, the
 //! nave's +7 %), and a half-covered layer hid a whole pixel of light at a
 //! silhouette. Where in the pixel a fragment lies, and its plane's depth
-//! there, separate both (`docs/exact/findings.md`).
+//! there, separate both (`docs/lab/exact/findings.md`).
 //!
 //! The fragments of a pixel are taken in a canonical order, `(node,
 //! coverage)`, so the `f32` sums depend on the set of splats only, not on

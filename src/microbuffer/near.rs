@@ -5,7 +5,7 @@
 //! the ledge buried under the wall (unlit, their centres in shadow) poke out
 //! from under it, and lit disks overhang the ledge's edge. There 77–93 % of
 //! the irradiance comes from within two surfel radii, and the gather was off
-//! by −93 to +141 % at every Ω and N (BENCHMARKS.md, "Sponza's error
+//! by −93 to +141 % at every Ω and N (docs/lab/BENCHMARKS.md, "Sponza's error
 //! floor"). So where a receiver's cut holds a leaf of another surface within
 //! [`NEAR_RADII`] of its own radius, the leaves that near are left out and
 //! each pixel casts one ray through its centre, up to one radius further: a

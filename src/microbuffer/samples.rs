@@ -32,13 +32,13 @@ const ROUNDING: f32 = 1e-4;
 /// the blocker (`examples/exact`, mid-wall, a light behind a slab): at Ω 0,
 /// N 96, 16 % error with no hiding, 3.0 % at ×2, 1.0 % at ×3; at Ω 0.002
 /// the clusters' ×2 takes N 24 / 48 / 96 from 5.6 / 6.5 / 11.4 % (leaves
-/// hiding alone) to 5.6 / 1.8 / 1.4 % (`docs/exact/findings.md`). The
+/// hiding alone) to 5.6 / 1.8 / 1.4 % (`docs/lab/exact/findings.md`). The
 /// grown disks also hide a band past an occluder's silhouette. The band
 /// narrows with density and Ω, but slowly. It is all of the Cornell box's
 /// indirect bias (−1.1 % at the defaults, about 0 without the blocks) and
 /// all of Sponza's (−2.7 %). Shrinking or clipping the disks at a
 /// surface's edges opens gaps through which the nave leaks
-/// (BENCHMARKS.md, "What bounds Sponza at 2 %").
+/// (docs/lab/BENCHMARKS.md, "What bounds Sponza at 2 %").
 const HIDE_LEAF: f32 = 3.0;
 const HIDE_PLANAR: f32 = 2.0;
 

@@ -75,7 +75,7 @@ pub fn series(points: &[ErrorPoint]) -> Vec<Series> {
 /// and 3.55 % at 16 (a 2.6 % floor) and measured 3.13 % at 64, where the
 /// 0.75 % its mean offset made had it reach 2 % at 20 s: a few hundred
 /// pixels where the gather misses light from a surface in contact hold
-/// most of its squared error (BENCHMARKS.md, "Sponza's error floor").
+/// most of its squared error (docs/lab/BENCHMARKS.md, "Sponza's error floor").
 ///
 /// ```
 /// use pbgi::report::fitted_floor;

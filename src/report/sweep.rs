@@ -159,7 +159,7 @@ const SMALL_OMEGA_MIN_SPP: u32 = 4;
 /// gather costs less than the camera samples' own work where a frame's
 /// error is their noise. Sponza at 4 spp: 3.2 s for 5.59 % against the
 /// defaults' 9.1 s for 5.38 %; the nave, whose error is its bias sooner,
-/// loses by it (BENCHMARKS.md, "The fast side of the curve").
+/// loses by it (docs/lab/BENCHMARKS.md, "The fast side of the curve").
 const COARSE: (f32, usize) = (0.5, 8);
 
 /// The curves below start here: they trade a little of the gather's or the
