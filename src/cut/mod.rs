@@ -11,7 +11,7 @@
 //!
 //! The cut is a function of (tree, receiver, Ω) alone: every scheme visits the
 //! same (receiver, node) pairs and reports the same splats and discards, in
-//! its own order (docs/design.md, "The node test" and "The cut").
+//! its own order (docs/design.md, "2. The node test and the cut").
 
 pub mod classify;
 pub mod hybrid;
