@@ -2,8 +2,9 @@
 """Check every relative markdown link `](path)` / `](path#anchor)` in README.md and
 docs/**/*.md: the file must exist relative to the linking file, and an anchor
 into a .md file must match one of its headings (GitHub slugs).
-Also checks repository-root textual mentions of docs/... and BENCHMARKS.md paths in
-all tracked text files (comments included)."""
+Also checks that every path under the docs folder (and the lab's benchmarks page)
+named in plain text in a tracked file, comments included, exists. Exits 1 on a
+problem."""
 import os, re, subprocess, sys, unicodedata
 
 root = sys.argv[1] if len(sys.argv) > 1 else "."

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Quoted section names after a path: `docs/x.md, "Section"`, `BENCHMARKS.md, "Section"`,
-`[..](x.md) ("Section")`: the quoted text must begin a heading or a bold lead of the target."""
+"""Quoted section names after a path (a docs page, or the lab's benchmarks page,
+then a comma and "Section"; or a markdown link then ("Section")): the quoted
+text must begin a heading or a bold lead of the target. Exits 1 on a miss."""
 import os, re, subprocess, sys
 os.chdir(sys.argv[1] if len(sys.argv) > 1 else ".")
 tracked = subprocess.run(["git", "ls-files"], capture_output=True, text=True).stdout.split()

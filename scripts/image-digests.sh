@@ -14,14 +14,15 @@ trap 'rm -rf "$tmp"' EXIT
 cases=(
     "cornell-box"
     "cornell-box --gathers all"
+    "cornell-box --gathers sparse"
+    "cornell-box --gathers cache:0.1"
     "cornell-box --ao --spp 1"
     "cornell-box --bounces 2 --spp 1"
     "cornell-box --scheme scalar --spp 1"
     "cornell-box --scheme hybrid --spp 1"
     "cornell-box-glossy --spp 1"
+    "cornell-box-glossy --gathers sparse --spp 1"
     "nave --spp 1"
-    "cornell-box --gathers cache"
-    "cornell-box-glossy --gathers cache --spp 1"
 )
 out="$tmp/digests.txt"
 for c in "${cases[@]}"; do

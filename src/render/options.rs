@@ -64,9 +64,11 @@ impl std::str::FromStr for Component {
 /// Where the indirect light is gathered.
 ///
 /// It varies slowly over a surface, so a gather per camera sample is mostly
-/// wasted: [`Gathers::Sparse`] gathers on a lattice of pixel centres and
-/// interpolates, refining the lattice where the geometry or the gathered
-/// light changes (`render::sparse`).
+/// wasted. By default ([`Gathers::CACHE`]) records on the surfaces in world
+/// space are gathered once and blended by every camera sample, tile and
+/// frame that sees them (`crate::cache`); [`Gathers::Sparse`] gathers on a
+/// lattice of pixel centres and interpolates, refining the lattice where
+/// the geometry or the gathered light changes (`render::sparse`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Gathers {
     /// One gather per camera sample: the dense render, for validation.
@@ -90,12 +92,23 @@ pub enum Gathers {
     },
 }
 
+impl Gathers {
+    /// The cache at its default threshold
+    /// ([`crate::cache::DEFAULT_THRESHOLD`]): the default gathers.
+    pub const CACHE: Gathers = Gathers::Cache {
+        threshold: crate::cache::DEFAULT_THRESHOLD,
+    };
+    /// The screen lattice at its defaults: 4 pixels apart, refined at 0.1
+    /// change.
+    pub const SPARSE: Gathers = Gathers::Sparse {
+        spacing: 4,
+        threshold: 0.1,
+    };
+}
+
 impl Default for Gathers {
     fn default() -> Self {
-        Gathers::Sparse {
-            spacing: 4,
-            threshold: 0.1,
-        }
+        Gathers::CACHE
     }
 }
 
@@ -151,8 +164,9 @@ pub struct RenderOptions {
     pub bounces: u32,
     /// Camera samples per pixel (antialiasing; each a receiver of direct light).
     pub spp: u32,
-    /// Where the indirect light is gathered: at a sparse, adaptive lattice
-    /// of pixels (the default) or at every camera sample.
+    /// Where the indirect light is gathered: at records in world space (the
+    /// default), at a sparse, adaptive lattice of pixels, or at every
+    /// camera sample.
     pub gathers: Gathers,
     /// Area-light samples at each camera sample's receiver (`None`:
     /// [`DEFAULT_LIGHT_SAMPLES`]), independent of the camera samples: direct

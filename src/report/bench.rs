@@ -16,7 +16,6 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cache::CacheOptions;
 use crate::cut::{CutSink, Receiver, Scheme, SchemeChoice, Traversal, TraversalStats};
 use crate::microbuffer::Convolution;
 use crate::render::{Frame, Gathers, PacketPoint, RenderError, RenderOptions};
@@ -255,9 +254,7 @@ pub fn bench(
 
     let mut render = opts.render;
     if opts.receivers == BenchReceivers::Records && !matches!(render.gathers, Gathers::Cache { .. }) {
-        render.gathers = Gathers::Cache {
-            threshold: CacheOptions::default().threshold,
-        };
+        render.gathers = Gathers::CACHE;
     }
     let frame = Frame::prepare(scene, &render)?;
     let traversal = Traversal::new(frame.tree(), frame.opts.cut)?;

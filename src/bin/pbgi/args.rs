@@ -251,21 +251,21 @@ impl Settings {
     }
 }
 
-/// `--gathers`: "all" (every camera sample gathers), "sparse" (the default
-/// lattice), "cache" (world-space records; "cache:T" at threshold T), or a
-/// number: sparse gathers that many pixels apart.
+/// `--gathers`: "all" (every camera sample gathers), "cache" (world-space
+/// records, the default; "cache:T" at threshold T), "sparse" (the screen
+/// lattice), or a number: sparse gathers that many pixels apart.
 pub fn parse_gathers(g: &str) -> Res<Gathers> {
     match g.trim() {
         "all" => Ok(Gathers::All),
-        "sparse" => Ok(Gathers::default()),
-        "cache" => Ok(Gathers::Cache { threshold: 0.1 }),
+        "sparse" => Ok(Gathers::SPARSE),
+        "cache" => Ok(Gathers::CACHE),
         g if g.starts_with("cache:") => match g["cache:".len()..].parse::<f32>() {
             Ok(threshold) if threshold.is_finite() && threshold > 0.0 => Ok(Gathers::Cache { threshold }),
             _ => Err(crate::exit::usage(format!(
                 "--gathers {g:?}: the cache's threshold is a number above 0"
             ))),
         },
-        g => match (g.parse(), Gathers::default()) {
+        g => match (g.parse(), Gathers::SPARSE) {
             (Ok(spacing), Gathers::Sparse { threshold, .. }) => Ok(Gathers::Sparse { spacing, threshold }),
             _ => Err(crate::exit::usage(format!(
                 "--gathers: {g:?} is neither \"sparse\", \"cache\", \"all\" nor a spacing in pixels"
@@ -349,21 +349,22 @@ pub struct RenderArgs {
     /// light). Default: the scene file's sample_count, else 4.
     #[arg(long, value_parser = bounded_u32(1, MAX_SPP), allow_negative_numbers = true)]
     pub spp: Option<u32>,
-    /// Where the indirect light is gathered: "sparse" (a lattice of pixels,
-    /// refined at edges and where the light changes, interpolated at each
-    /// camera sample), "cache" (records on the surfaces in world space,
-    /// shared by the pixels, tiles and frames that see them) or "all" (at
+    /// Where the indirect light is gathered: "cache" (records on the
+    /// surfaces in world space, shared by the pixels, tiles and frames that
+    /// see them), "sparse" (a lattice of pixels, refined at edges and where
+    /// the light changes, interpolated at each camera sample) or "all" (at
     /// every camera sample: the dense render, for validation).
-    #[arg(long, default_value = "sparse")]
+    #[arg(long, default_value = "cache")]
     pub gathers: String,
     /// Pixels between sparse gathers on smooth surfaces (a power of two, 1 to 64).
     #[arg(long, default_value_t = 4)]
     pub gather_spacing: u32,
-    /// Relative change of the gathered light across a lattice cell, or
-    /// between the cache records a point blends, that refines it (smaller:
-    /// more gathers, closer to the dense render).
-    #[arg(long, default_value_t = 0.1)]
-    pub gather_threshold: f32,
+    /// Relative difference between the cache records a point blends, or
+    /// change of the gathered light across a lattice cell, that refines it
+    /// (smaller: more gathers, closer to the dense render). Default: 0.4
+    /// for the cache, 0.1 for the lattice.
+    #[arg(long)]
+    pub gather_threshold: Option<f32>,
     /// Area-light samples at each camera sample's receiver for direct light
     /// (default 8), stratified over the lights and over the pixel's camera samples.
     #[arg(long, value_parser = bounded_u32(0, MAX_DIRECT_SAMPLES), allow_negative_numbers = true)]
@@ -545,18 +546,18 @@ pub fn options(a: &RenderArgs) -> Res<RenderOptions> {
         component: a.component.parse()?,
         gathers: match parse_gathers(&a.gathers)? {
             // `--gathers 8` is `--gathers sparse --gather-spacing 8`.
-            Gathers::Sparse { spacing, .. } => Gathers::Sparse {
+            Gathers::Sparse { spacing, threshold } => Gathers::Sparse {
                 spacing: if a.gathers.trim() == "sparse" {
                     a.gather_spacing
                 } else {
                     spacing
                 },
-                threshold: a.gather_threshold,
+                threshold: a.gather_threshold.unwrap_or(threshold),
             },
             // `--gathers cache:0.4` is `--gathers cache --gather-threshold 0.4`.
             Gathers::Cache { threshold } => Gathers::Cache {
                 threshold: if a.gathers.trim() == "cache" {
-                    a.gather_threshold
+                    a.gather_threshold.unwrap_or(threshold)
                 } else {
                     threshold
                 },
