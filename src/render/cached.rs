@@ -341,32 +341,30 @@ impl Frame<'_> {
             .collect();
         let opts = |incident| CacheOptions { threshold, incident };
         let cache = cache.get_or_insert_with(|| Cache::new(&self.tree, opts(false)));
-        let (settled, prepared) = settle(
-            cache,
-            per_tile.iter_mut().map(|t| std::mem::take(&mut t[0])),
-            gather,
-            self.convolution(),
-        )?;
-        timers.trav.add(prepared.trav);
-        timers.shading.add(prepared.shading);
-        let (mut stats, mut count) = (prepared.stats, prepared.records);
-        let mut served = [None, None];
-        for (i, g) in [(TILTED, Some(gather)), (LOBED, glossy)] {
-            let Some(g) = g.filter(|_| per_tile.iter().any(|t| !t[1 + i].is_empty())) else {
-                continue;
-            };
-            let c = incident[i].get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
+        let wanted = [TILTED, LOBED].map(|i| per_tile.iter().any(|t| !t[1 + i].is_empty()));
+        let (mut stats, mut count) = (TraversalStats::default(), 0);
+        // The points of list `i` of every tile settled in `cache`.
+        let mut settle_in = |cache: &mut Cache, i: usize, gather: &Gather| {
             let (settled, prepared) = settle(
-                c,
-                per_tile.iter_mut().map(|t| std::mem::take(&mut t[1 + i])),
-                g,
+                cache,
+                per_tile.iter_mut().map(|t| std::mem::take(&mut t[i])),
+                gather,
                 self.convolution(),
             )?;
             timers.trav.add(prepared.trav);
             timers.shading.add(prepared.shading);
             stats.merge(&prepared.stats);
             count += prepared.records;
-            served[i] = Some(settled);
+            Ok::<_, RenderError>(settled)
+        };
+        let settled = settle_in(cache, 0, gather)?;
+        let mut served = [None, None];
+        for (i, g) in [(TILTED, Some(gather)), (LOBED, glossy)] {
+            let Some(g) = g.filter(|_| wanted[i]) else {
+                continue;
+            };
+            let c = incident[i].get_or_insert_with(|| Cache::new(&self.tree, opts(true)));
+            served[i] = Some(settle_in(c, 1 + i, g)?);
         }
         Ok(Some(CacheGathers {
             stats,

@@ -128,30 +128,23 @@ impl Frame<'_> {
         let (own, sharing) = self.share_gathers(own, &pixels, eye);
         let e = self.gather_all(&own, &pixels, &mut acc, gathers, &mut gatherers, timers)?;
         if opts.component != Component::Direct {
-            // Irradiance not gathered at the sample itself: each sample gets
-            // one indirect term, whether gathered, interpolated or shared.
-            let interpolated = served
-                .into_iter()
-                .map(|(s, pp, e)| (s, pp, e, "interpolation from the lattice or the cache"));
-            let shared = sharing
-                .into_iter()
-                .map(|(s, pp, leader)| (s, pp, e[leader], "a gather shared in the pixel"));
-            for (s, pp, e, stage) in interpolated.chain(shared) {
+            // Light not gathered at the sample itself: each sample gets one
+            // indirect term, whether gathered, interpolated, shared or
+            // reflected from the incident caches' records.
+            let interpolated = served.into_iter().map(|(s, pp, e)| {
                 let l = self.indirect(&pp, e, None);
+                (s, pp, l, "interpolation from the lattice or the cache")
+            });
+            let shared = sharing.into_iter().map(|(s, pp, leader)| {
+                let l = self.indirect(&pp, e[leader], None);
+                (s, pp, l, "a gather shared in the pixel")
+            });
+            let reflected = reflected
+                .into_iter()
+                .map(|(s, pp, l)| (s, pp, l, "reflection of the cache's records"));
+            for (s, pp, l, stage) in interpolated.chain(shared).chain(reflected) {
                 if !l.is_finite() {
                     return Err(non_finite(stage, &pixels, &pp, s, l));
-                }
-                acc.adds[pp.pixel * spp + s as usize] += l;
-            }
-            for (s, pp, l) in reflected {
-                if !l.is_finite() {
-                    return Err(non_finite(
-                        "reflection of the cache's records",
-                        &pixels,
-                        &pp,
-                        s,
-                        l,
-                    ));
                 }
                 acc.adds[pp.pixel * spp + s as usize] += l;
             }
