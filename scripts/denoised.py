@@ -40,13 +40,19 @@ mi.set_variant("llvm_ad_rgb")
 import drjit as dr  # noqa: E402  (after the variant)
 
 
-def load(xml, bounces):
-    """The scene with max_depth = bounces + 2, and a box pixel filter where
-    the file takes it as a parameter (Mitsuba refuses unused ones)."""
+def load(xml, bounces, resolution=None):
+    """The scene with max_depth = bounces + 2, a box pixel filter where the
+    file takes it as a parameter (Mitsuba refuses unused ones), and the
+    film `resolution` (w, h) where the file takes `$resx` and `$resy`."""
     params = {"max_depth": bounces + 2}
     with open(xml) as f:
-        if 'name="rfilter"' in f.read():
-            params["rfilter"] = "box"
+        text = f.read()
+    if 'name="rfilter"' in text:
+        params["rfilter"] = "box"
+    if resolution:
+        if "$resx" not in text or "$resy" not in text:
+            sys.exit(f"{xml}: --resolution needs a film sized by $resx and $resy")
+        params["resx"], params["resy"] = resolution
     return mi.load_file(xml, **params)
 
 
@@ -72,10 +78,10 @@ def read(path):
     return np.array(b)
 
 
-def mitsuba_point(xml, bounces, spp, seed):
+def mitsuba_point(xml, bounces, spp, seed, resolution=None):
     """(denoised image, seconds): load, render, denoise."""
     t = time.perf_counter()
-    scene = load(xml, bounces)
+    scene = load(xml, bounces, resolution)
     img = mi.render(scene, spp=spp, seed=seed)
     dr.eval(img)
     dr.sync_thread()
@@ -83,14 +89,15 @@ def mitsuba_point(xml, bounces, spp, seed):
     return out, time.perf_counter() - t
 
 
-def pbgi_point(pbgi, scene, bounces, spp, seed, tmp):
+def pbgi_point(pbgi, scene, bounces, spp, seed, tmp, resolution=None):
     """(denoised image, seconds): the whole `pbgi reference` process, the
     read and the denoise."""
     path = os.path.join(tmp, f"pbgi-raw-{spp}-{seed}.exr")
+    size = ["--resolution", "%dx%d" % resolution] if resolution else []
     t = time.perf_counter()
     subprocess.run(
         [pbgi, "reference", scene, "--spp", str(spp), "--seed", str(seed),
-         "--bounces", str(bounces), "-o", path],
+         "--bounces", str(bounces), "-o", path] + size,
         check=True, capture_output=True, text=True,
     )
     out = denoise(read(path))
@@ -114,12 +121,15 @@ def main():
                     help="paths per pixel along both curves (comma-separated)")
     ap.add_argument("--bounces", type=int, default=1)
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--resolution", metavar="WxH",
+                    help="image size (the Mitsuba file's $resx and $resy, pbgi's --resolution)")
     ap.add_argument("--out", default="report/denoised")
     ap.add_argument("--no-mitsuba", action="store_true")
     ap.add_argument("--no-pbgi", action="store_true")
     a = ap.parse_args()
     xml = a.xml or a.scene
     spps = [int(s) for s in a.spp.split(",")]
+    res = tuple(int(x) for x in a.resolution.split("x")) if a.resolution else None
     os.makedirs(a.out, exist_ok=True)
     print(f"load average {os.getloadavg()[0]:.2f}; Mitsuba {mi.__version__}, drjit "
           f"{dr.__version__}, {dr.thread_count()} threads; OIDN through pyoidn "
@@ -128,10 +138,10 @@ def main():
     rows = []
     if not a.no_mitsuba:
         t = time.perf_counter()
-        mitsuba_point(xml, a.bounces, 4, seed=1)  # the JIT and OIDN warm up
+        mitsuba_point(xml, a.bounces, 4, 1, res)  # the JIT and OIDN warm up
         print(f"Mitsuba + OIDN warm-up: {time.perf_counter() - t:.2f} s", flush=True)
         for i, spp in enumerate(spps):
-            img, s = best_of(a.repeat, lambda r: mitsuba_point(xml, a.bounces, spp, 1000 * (i + 1) + r))
+            img, s = best_of(a.repeat, lambda r: mitsuba_point(xml, a.bounces, spp, 1000 * (i + 1) + r, res))
             name = f"mitsuba-{spp}.exr"
             write(os.path.join(a.out, name), img)
             rows.append(("Mitsuba 3 + OIDN", spp, s, name))
@@ -140,7 +150,7 @@ def main():
         with tempfile.TemporaryDirectory() as tmp:
             for i, spp in enumerate(spps):
                 img, s = best_of(
-                    a.repeat, lambda r: pbgi_point(a.pbgi, a.scene, a.bounces, spp, 2000 * (i + 1) + r, tmp))
+                    a.repeat, lambda r: pbgi_point(a.pbgi, a.scene, a.bounces, spp, 2000 * (i + 1) + r, tmp, res))
                 name = f"pbgi-{spp}.exr"
                 write(os.path.join(a.out, name), img)
                 rows.append(("pbgi path tracer + OIDN", spp, s, name))

@@ -4,7 +4,7 @@
 # with those curves added.
 #
 #   scripts/denoised.sh SCENE [--xml MITSUBA.xml] [--spp 1,4,16,64,256]
-#       [--out DIR] [--repeat N] [-- PBGI-REPORT-ARGS...]
+#       [--resolution WxH] [--out DIR] [--repeat N] [-- PBGI-REPORT-ARGS...]
 #
 # e.g. the Cornell box (pbgi's built-in box and its Mitsuba export):
 #   scripts/denoised.sh cornell-box --xml ../shared/scenes/cornell-box/cbox.xml \

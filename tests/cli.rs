@@ -320,6 +320,65 @@ fn each_class_of_error_has_its_exit_status() {
     }
 }
 
+/// `--denoise` denoises in a build with the `denoise` feature; in one
+/// without, `render` and `report` refuse it as a usage error that names
+/// the feature, before any work.
+#[test]
+fn denoise_denoises_or_names_the_feature_it_needs() {
+    let dir = scratch("denoise");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_pbgi"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("pbgi runs")
+    };
+    let render = [
+        "render",
+        "--resolution",
+        "32x32",
+        "--spp",
+        "1",
+        "-o",
+        "d.png",
+        "--denoise",
+    ];
+    let out = run(&render);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    if cfg!(feature = "denoise") {
+        assert!(out.status.success(), "{stderr}");
+        assert!(stdout.contains("denoised by Intel OIDN"), "{stdout}");
+        assert!(dir.join("d.png").exists());
+        return;
+    }
+    let report = [
+        "report",
+        "--denoise",
+        "--out",
+        "r",
+        "--spp",
+        "1",
+        "--path-tracer-spp",
+        "1",
+    ];
+    for (args, out) in [(&render[..], out), (&report[..], run(&report))] {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "pbgi {}: {stderr}", args.join(" "));
+        assert!(
+            stderr.contains("denoise feature"),
+            "pbgi {}: {stderr}",
+            args.join(" ")
+        );
+    }
+    assert!(
+        !dir.join("d.png").exists() && !dir.join("r").exists(),
+        "no work before the error"
+    );
+}
+
 #[test]
 fn render_cache_serves_a_later_run_and_frozen_leaves_the_file_as_it_was() {
     let dir = scratch("cache");

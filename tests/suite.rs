@@ -12,10 +12,13 @@ mod cache;
 mod camera_path;
 mod cli;
 mod cut_equivalence;
+#[cfg(feature = "denoise")]
+mod denoise;
 mod exact;
 mod gather;
 mod gathers;
 mod gltf;
+mod guides;
 mod hiding;
 mod inputs;
 mod reference;

@@ -15,14 +15,19 @@
 //! sparse gathers), `cached` (the frame's records of the world-space
 //! cache, `crate::cache`), `share` (which samples it does not serve share a
 //! gather), `tile` (one tile's camera samples);
-//! `image` and `output` (what comes out); `reference` (the path tracer the
-//! report measures against).
+//! `image` and `output` (what comes out); `guides` (a denoiser's albedo
+//! and normal images) and `denoise` (Intel OIDN on the image, the
+//! `denoise` feature); `reference` (the path tracer the report measures
+//! against).
 
 mod bake;
 mod baked;
 mod bounces;
 mod cached;
+#[cfg(feature = "denoise")]
+mod denoise;
 mod frame;
+mod guides;
 mod image;
 mod light;
 mod near;
@@ -38,8 +43,11 @@ mod trace;
 
 pub use bake::{BakeOptions, Baked, bake};
 pub use baked::{bake_record, bake_tree, bake_tree_reporting, scene_hash};
+#[cfg(feature = "denoise")]
+pub use denoise::{DenoiseError, denoise};
 pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
+pub use guides::Guides;
 pub use image::Image;
 pub use light::Lights;
 pub use near::NearRays;

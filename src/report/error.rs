@@ -31,6 +31,11 @@ pub enum ReportError {
         /// The line.
         text: String,
     },
+    /// A denoised curve, in a build without the `denoise` feature.
+    NoDenoiser,
+    /// The denoiser failed.
+    #[cfg(feature = "denoise")]
+    Denoise(crate::render::DenoiseError),
     /// A plot could not be drawn or written.
     Plot {
         /// The file being written.
@@ -52,6 +57,12 @@ impl fmt::Display for ReportError {
             ReportError::NoSamples { curve } => write!(f, "{curve}: a point of 0 samples per pixel"),
             ReportError::Csv { line, what, text } => write!(f, "line {line}: {what}: {text}"),
             ReportError::Plot { path, message } => write!(f, "{}: {message}", path.display()),
+            ReportError::NoDenoiser => write!(
+                f,
+                "a denoised curve needs a pbgi built with the denoise feature (docs/options.md, \"Denoising\")"
+            ),
+            #[cfg(feature = "denoise")]
+            ReportError::Denoise(e) => e.fmt(f),
         }
     }
 }
@@ -60,6 +71,8 @@ impl std::error::Error for ReportError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             ReportError::Render(e) => Some(e),
+            #[cfg(feature = "denoise")]
+            ReportError::Denoise(e) => Some(e),
             _ => None,
         }
     }

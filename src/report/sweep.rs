@@ -8,7 +8,7 @@ use super::compare::{compare, emitter_mask};
 use super::error::ReportError;
 use super::eta::Eta;
 use crate::cut::{CutOptions, SchemeChoice};
-use crate::render::{Gathers, Image, ReferenceOptions, RenderOptions, render, render_reference};
+use crate::render::{Gathers, Image, ReferenceOptions, RenderOptions, Timings, render, render_reference};
 use crate::scene::Scene;
 
 /// Which renderer made an image.
@@ -62,6 +62,10 @@ pub struct Curve {
     pub options: RenderOptions,
     /// Camera samples per pixel of its points, cheapest first.
     pub spp: Vec<u32>,
+    /// Each image through Intel OIDN, guided by its albedo and normals
+    /// ([`Frame::guides`](crate::render::Frame::guides)), the guides and
+    /// the denoise timed with it; needs the `denoise` feature.
+    pub denoised: bool,
 }
 
 /// Camera samples per pixel along the default point-based curves.
@@ -257,6 +261,7 @@ pub fn default_curves(base: &RenderOptions, spp: &[u32], emitters: bool) -> Vec<
                 label: v.label(),
                 options,
                 spp,
+                denoised: false,
             });
         }
     }
@@ -332,6 +337,7 @@ impl Grid {
                                     label: v.label(),
                                     options,
                                     spp: spp.to_vec(),
+                                    denoised: false,
                                 });
                             }
                         }
@@ -461,9 +467,13 @@ pub fn error_sweep(
                     spp,
                     ..opts.curves[c].options
                 };
-                let out = render(scene, &ro, &on_part)?;
-                let t = &out.timings;
-                let m = compare(&out.image, reference, &mask)?;
+                let (image, t) = if opts.curves[c].denoised {
+                    denoised(scene, &ro, &on_part)?
+                } else {
+                    let out = render(scene, &ro, &on_part)?;
+                    (out.image, out.timings)
+                };
+                let m = compare(&image, reference, &mask)?;
                 ErrorPoint {
                     method: Method::PointBased,
                     label: opts.curves[c].label.clone(),
@@ -512,4 +522,32 @@ pub fn error_sweep(
     // Stable: within a curve the jobs already run cheapest first.
     points.sort_by_key(|p| p.0);
     Ok(points.into_iter().map(|p| p.1).collect())
+}
+
+/// A point-based image through Intel OIDN, guided by its albedo and
+/// normals, with its timings: the guides and the denoise count in its wall
+/// clock.
+#[cfg(feature = "denoise")]
+fn denoised(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Image, Timings), ReportError> {
+    let frame = crate::render::Frame::prepare(scene, opts)?;
+    let out = frame.render(progress)?;
+    let start = Instant::now();
+    let image = crate::render::denoise(&out.image, &frame.guides()).map_err(ReportError::Denoise)?;
+    let mut timings = out.timings;
+    timings.total_wall += start.elapsed().as_secs_f64();
+    Ok((image, timings))
+}
+
+/// Without the `denoise` feature there is no denoiser to run.
+#[cfg(not(feature = "denoise"))]
+fn denoised(
+    _: &Scene,
+    _: &RenderOptions,
+    _: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Image, Timings), ReportError> {
+    Err(ReportError::NoDenoiser)
 }

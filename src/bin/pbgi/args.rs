@@ -149,6 +149,10 @@ pub struct ReportArgs {
     /// image paths relative to the CSV's folder. May be given several times.
     #[arg(long)]
     pub denoised: Vec<PathBuf>,
+    /// Also each point-based curve through Intel OIDN, guided by albedo and
+    /// normals: a curve of its own, "… + OIDN" (the `denoise` feature).
+    #[arg(long)]
+    pub denoise: bool,
     /// Measure a shot instead of one image: each frame's error and the
     /// flicker (each frame-to-frame change against the true change) of
     /// point-based GI (--spp, default 4,16,64) and the path tracer
@@ -160,6 +164,9 @@ pub struct ReportArgs {
     /// path traced there at --reference-spp where missing (default OUT/references).
     #[arg(long, value_name = "DIR", requires = "camera_path")]
     pub reference_dir: Option<PathBuf>,
+    /// The view of every image (the references' too), where not the scene's.
+    #[command(flatten)]
+    pub view: ViewArgs,
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -342,6 +349,10 @@ pub struct RenderArgs {
     /// Output image: .png (tonemapped sRGB) or .exr (linear radiance). Default: SCENE.png.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Denoise the image with Intel OIDN, guided by its albedo and normals
+    /// (a pbgi built with the `denoise` feature: docs/options.md, "Denoising").
+    #[arg(long, conflicts_with = "camera_path")]
+    pub denoise: bool,
     /// Traversal scheme: auto, scalar, single, packet or hybrid.
     #[arg(long, default_value = "auto", help_heading = DEVELOPER)]
     pub scheme: String,

@@ -28,7 +28,8 @@ struct Row {
 }
 
 pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    crate::overrides::set_view(&mut scene, &a.view)?;
     let cameras = crate::path::cameras(path_file, &scene)?;
     let pool = thread_pool(a.threads)?;
     let opts = a.settings.for_scene(&a.scene, a.settings.options(1)?);

@@ -6,6 +6,7 @@
 mod args;
 mod bake;
 mod cache;
+mod denoise;
 mod exit;
 mod flicker;
 mod overrides;
@@ -140,6 +141,9 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
             out
         }
     };
+    if a.denoise {
+        denoise::available()?;
+    }
     let pool = thread_pool(a.threads)?;
     let loaded = match &a.tree {
         Some(path) => Some(bake::load_tree(path)?),
@@ -172,7 +176,12 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
     let out = pool.install(|| frame.render(&|done, total| tick(&bar, done, total)))?;
     bar.finish_and_clear();
-    write_image(&out.image, &out_path)?;
+    let clean = a
+        .denoise
+        .then(|| denoise::denoise(&frame, &out.image, &pool))
+        .transpose()?;
+    let image = clean.as_ref().map_or(&out.image, |c| &c.0);
+    write_image(image, &out_path)?;
     if let Some(c) = &cache {
         c.close(&frame)?;
     }
@@ -185,10 +194,13 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
             path.display()
         );
     }
+    if let Some((_, said)) = &clean {
+        println!("{said}");
+    }
     println!(
         "wrote {} (image digest {:016x})",
         out_path.display(),
-        out.image.digest()
+        image.digest()
     );
     Ok(())
 }

@@ -6,9 +6,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pbgi::render::{ReferenceOptions, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{
-    DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, ErrorPoint, External, Grid, Method, SweepOptions, SweepProgress,
-    check_reference, compare, default_curves, describe, emitter_mask, equal_error_markdown, error_sweep,
-    external_points, from_csv, mean_reference, to_csv, to_markdown,
+    Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, ErrorPoint, External, Grid, Method, SweepOptions,
+    SweepProgress, check_reference, compare, default_curves, describe, emitter_mask, equal_error_markdown,
+    error_sweep, external_points, from_csv, mean_reference, to_csv, to_markdown,
 };
 use pbgi::scene::Scene;
 
@@ -74,11 +74,23 @@ fn sweep_options(a: &ReportArgs, emitters: bool) -> Res<SweepOptions> {
     }
     grid.direct_samples.clone_from(&a.direct_samples);
     let spp = a.spp.clone().unwrap_or_else(|| DEFAULT_SPP.to_vec());
-    let curves = if grid.is_empty() {
+    let mut curves = if grid.is_empty() {
         default_curves(&base, &spp, emitters)
     } else {
         grid.curves(&base, &spp)
     };
+    if a.denoise {
+        crate::denoise::available()?;
+        let denoised: Vec<Curve> = curves
+            .iter()
+            .map(|c| Curve {
+                label: format!("{} + OIDN", c.label),
+                denoised: true,
+                ..c.clone()
+            })
+            .collect();
+        curves.extend(denoised);
+    }
     let path_tracer_spp = a.path_tracer_spp.clone().unwrap_or_else(|| {
         if a.full {
             FULL_PATH_TRACER_SPP.to_vec()
@@ -157,7 +169,8 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
         return crate::flicker::cmd_flicker(a, path);
     }
     let targets = targets(a)?;
-    let scene = load_scene(&a.scene)?;
+    let mut scene = load_scene(&a.scene)?;
+    crate::overrides::set_view(&mut scene, &a.view)?;
     let sweep = sweep_options(a, scene.has_emitters())?;
     let denoised = denoised_lists(a)?;
     let pool = thread_pool(a.threads)?;

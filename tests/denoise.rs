@@ -1,0 +1,52 @@
+//! Intel OIDN through the `denoise` feature (CI's denoise stage builds it):
+//! a noisy render comes nearer the converged one, and guides of another
+//! size are a typed error.
+
+use pbgi::render::{DenoiseError, Frame, Image, RenderOptions, denoise};
+use pbgi::report::{compare, emitter_mask};
+use pbgi::scene::builtin::cornell_box;
+
+fn frame_options(spp: u32) -> RenderOptions {
+    RenderOptions {
+        spp,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn denoising_brings_a_noisy_render_nearer_the_converged_one() {
+    let scene = cornell_box();
+    let converged = Frame::prepare(&scene, &frame_options(64))
+        .unwrap()
+        .render(&|_, _| {})
+        .unwrap()
+        .image;
+    let frame = Frame::prepare(&scene, &frame_options(1)).unwrap();
+    let noisy = frame.render(&|_, _| {}).unwrap().image;
+    let clean = denoise(&noisy, &frame.guides()).unwrap();
+    // The report's measure: relative RMSE over the pixels that see no
+    // emitter. Guides that show no albedo leave 0.68 of the error.
+    let mask = emitter_mask(&scene);
+    let error = |i: &Image| compare(i, &converged, &mask).unwrap().rel_rmse;
+    let (before, after) = (error(&noisy), error(&clean));
+    assert!(
+        after < 0.65 * before,
+        "1 spp against 64: {before:.4} before the denoiser, {after:.4} after"
+    );
+}
+
+#[test]
+fn guides_of_another_size_are_a_typed_error() {
+    let scene = cornell_box();
+    let frame = Frame::prepare(&scene, &frame_options(1)).unwrap();
+    let guides = frame.guides();
+    let small = Image {
+        width: 8,
+        height: 8,
+        pixels: vec![glam::Vec3::ONE; 64],
+    };
+    match denoise(&small, &guides) {
+        Err(DenoiseError::Size { image, guides }) => assert_eq!((image, guides), ((8, 8), (256, 256))),
+        r => panic!("expected a size error, got {:?}", r.map(|i| i.digest())),
+    }
+}
