@@ -332,6 +332,7 @@ impl<'s> Frame<'s> {
         mut misses: Option<&mut Vec<(usize, Vec3)>>,
     ) -> Vec<PacketPoint> {
         let cam = &self.camera;
+        let rays = cam.rays();
         let light_first = s.wrapping_mul(self.light_samples());
         // Each of the pixel's stratified samples filters its own share of
         // the pixel: together they cover it without blurring past it.
@@ -343,7 +344,7 @@ impl<'s> Frame<'s> {
                 self.opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
             );
             let (fx, fy) = film_point(x, y, s, self.opts.spp, &mut rng);
-            let dir = cam.ray_direction(fx, fy);
+            let dir = rays.direction(fx, fy);
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {
                     if let Some(point) =

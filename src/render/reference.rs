@@ -148,6 +148,7 @@ pub fn render_reference(
         .into_par_iter()
         .with_max_len(1)
         .map(|y| {
+            let rays = cam.rays();
             let row: Vec<Vec3> = (0..w)
                 .map(|x| {
                     let mut rng = Rng::new(
@@ -161,7 +162,7 @@ pub fn render_reference(
                             &tracer,
                             &lights,
                             cam.origin,
-                            cam.ray_direction(fx, fy),
+                            rays.direction(fx, fy),
                             opts.bounces,
                             opts.component,
                             &mut rng,
