@@ -10,6 +10,7 @@ mod common;
 mod bad_input;
 mod cache;
 mod camera_path;
+mod camera_samples;
 mod cli;
 mod cut_equivalence;
 #[cfg(feature = "denoise")]

@@ -83,6 +83,14 @@ pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), R
         }
         .into());
     }
+    if let Some(n @ (0 | 1)) = opts.first_samples {
+        return Err(Error::InvalidParameter {
+            name: "first samples",
+            value: n.to_string(),
+            expected: "at least 2 (a pixel's samples are compared)",
+        }
+        .into());
+    }
     if let Gathers::Sparse { spacing, threshold } = opts.gathers {
         if !(spacing.is_power_of_two() && spacing <= 64) {
             return Err(Error::InvalidParameter {

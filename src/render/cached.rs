@@ -33,12 +33,12 @@ pub(crate) enum Shared<'a> {
 
 impl Shared<'_> {
     /// The irradiance at a camera sample through film point `film` that
-    /// hit `p` with normal `n`, the `nth` that tile `tile` asks for, or
+    /// hit `p` with normal `n`, in slot `slot` of tile `tile`, or
     /// why it gathers itself.
     #[inline]
     pub fn irradiance(
         &self,
-        (tile, nth): (usize, usize),
+        (tile, slot): (usize, usize),
         film: (f32, f32),
         p: Vec3,
         n: Vec3,
@@ -46,7 +46,7 @@ impl Shared<'_> {
     ) -> Result<Served, RenderError> {
         Ok(match self {
             Shared::Lattice(l) => l.irradiance(film, p, n, eye),
-            Shared::Cache(c) => match c.get(tile, nth, p, n)?.0 {
+            Shared::Cache(c) => match c.get(tile, slot, p, n)?.0 {
                 Lookup::Light(e) => Served::Light(e),
                 Lookup::Uncovered => Served::NoCorner,
                 Lookup::Changing => Served::Changing,
@@ -57,16 +57,31 @@ impl Shared<'_> {
 
 /// What the cache gives each camera sample that asks it, settled while
 /// its records were made ([`Prepared::lookups`](crate::cache::Prepared)),
-/// in the order each tile asks, so that no sample blends its records twice.
+/// so that no sample blends its records twice. A tile asks by the sample's
+/// slot, `s × pixels + k` for camera sample `s` of its pixel `k`: an
+/// adaptive tile asks for some of the samples the frame traced.
 pub(crate) struct Settled {
     lookups: Vec<Lookup>,
     levels: Vec<u8>,
     /// A hash of each sample's place, checked when it is read: a tile that
-    /// asked in another order than the frame traced would take another
-    /// sample's light.
+    /// traced another sample in a slot would take another sample's light.
     marks: Vec<u32>,
     /// Where each tile's samples begin, and the end.
     starts: Vec<usize>,
+    /// Each tile's slots (from `slot_starts[tile]`): the sample's index
+    /// among the tile's, or [`NO_SAMPLE`].
+    slots: Vec<u32>,
+    slot_starts: Vec<usize>,
+}
+
+/// A slot whose sample the cache did not settle (a miss, or another list's).
+const NO_SAMPLE: u32 = u32::MAX;
+
+/// One tile's samples of one list: their places and each slot's index among them.
+#[derive(Default)]
+struct TileSamples {
+    points: Vec<(Vec3, Vec3)>,
+    slots: Vec<u32>,
 }
 
 impl Settled {
@@ -81,16 +96,24 @@ impl Settled {
         (h ^ h >> 32) as u32
     }
 
-    /// Sample `nth` of tile `tile`, which lies at `p` facing `n`: what it
+    /// The sample in slot `slot` of tile `tile`, which lies at `p` facing `n`: what it
     /// takes, and the level it settled at.
     #[inline]
-    fn get(&self, tile: usize, nth: usize, p: Vec3, n: Vec3) -> Result<(Lookup, u32), RenderError> {
-        let i = self.starts[tile] + nth;
-        if i < self.starts[tile + 1] && self.marks[i] == Self::mark(p, n) {
-            return Ok((self.lookups[i], u32::from(self.levels[i])));
+    fn get(&self, tile: usize, slot: usize, p: Vec3, n: Vec3) -> Result<(Lookup, u32), RenderError> {
+        let (a, b) = (self.slot_starts[tile], self.slot_starts[tile + 1]);
+        let j = if a + slot < b {
+            self.slots[a + slot]
+        } else {
+            NO_SAMPLE
+        };
+        if j != NO_SAMPLE {
+            let i = self.starts[tile] + j as usize;
+            if self.marks[i] == Self::mark(p, n) {
+                return Ok((self.lookups[i], u32::from(self.levels[i])));
+            }
         }
         Err(RenderError::Check(format!(
-            "tile {tile} asked the cache for its sample {nth} at {p}, which the frame did not trace there"
+            "tile {tile} asked the cache for its sample in slot {slot} at {p}, which the frame did not trace there"
         )))
     }
 }
@@ -114,7 +137,7 @@ pub(crate) struct Incident<'a> {
 }
 
 impl Incident<'_> {
-    /// The indirect light camera sample `pp`, the `nth` of tile `tile` to
+    /// The indirect light camera sample `pp`, in slot `slot` of tile `tile`, to
     /// ask incident cache `which`, reflects, or `None` where it gathers
     /// itself: its diffuse part from the records' blended irradiance (or
     /// their incident light about its tilted normal), its lobe convolved
@@ -124,7 +147,7 @@ impl Incident<'_> {
         &self,
         frame: &Frame,
         which: usize,
-        (tile, nth): (usize, usize),
+        (tile, slot): (usize, usize),
         pp: &PacketPoint,
     ) -> Result<Option<Vec3>, RenderError> {
         let Some((cache, settled)) = self.served[which] else {
@@ -132,7 +155,7 @@ impl Incident<'_> {
         };
         let sp = &pp.point;
         let (p, n) = (sp.position, sp.receiver_normal);
-        let (lookup, level) = settled.get(tile, nth, p, n)?;
+        let (lookup, level) = settled.get(tile, slot, p, n)?;
         let Lookup::Light(e) = lookup else {
             return Ok(None);
         };
@@ -321,19 +344,31 @@ impl Frame<'_> {
         // traced the same way (`Frame::packet`), those that take the
         // irradiance alone and those each incident cache serves (by the
         // normal they gather about).
-        let spp = self.opts.spp;
-        let mut per_tile: Vec<[Vec<(Vec3, Vec3)>; 3]> = (0..self.tiles())
+        // Every camera sample a tile may take: an adaptive one takes those
+        // past the first in some pixels only.
+        let spp = self.opts.spp as usize;
+        let mut per_tile: Vec<[TileSamples; 3]> = (0..self.tiles())
             .into_par_iter()
             .with_max_len(1)
             .map(|tile| {
                 let pixels = self.tile_pixels(tile);
-                let mut out = [Vec::new(), Vec::new(), Vec::new()];
-                for pp in (0..spp).flat_map(|s| self.packet(&pixels, s, None)) {
-                    let (m, sp) = (pp.point.material, &pp.point);
-                    if !self.gathers_per_sample(m) {
-                        out[0].push((sp.position, sp.normal));
-                    } else if let Some(i) = self.incident_cache(m) {
-                        out[1 + i].push((sp.position, sp.receiver_normal));
+                let mut out: [TileSamples; 3] = Default::default();
+                for s in 0..spp {
+                    for pp in self.packet(&pixels, s as u32, None) {
+                        let (m, sp) = (pp.point.material, &pp.point);
+                        let (list, place) = if !self.gathers_per_sample(m) {
+                            (0, (sp.position, sp.normal))
+                        } else if let Some(i) = self.incident_cache(m) {
+                            (1 + i, (sp.position, sp.receiver_normal))
+                        } else {
+                            continue;
+                        };
+                        let t = &mut out[list];
+                        if t.slots.is_empty() {
+                            t.slots = vec![NO_SAMPLE; spp * pixels.len()];
+                        }
+                        t.slots[s * pixels.len() + pp.pixel] = t.points.len() as u32;
+                        t.points.push(place);
                     }
                 }
                 out
@@ -341,7 +376,7 @@ impl Frame<'_> {
             .collect();
         let opts = |incident| CacheOptions { threshold, incident };
         let cache = cache.get_or_insert_with(|| Cache::new(&self.tree, opts(false)));
-        let wanted = [TILTED, LOBED].map(|i| per_tile.iter().any(|t| !t[1 + i].is_empty()));
+        let wanted = [TILTED, LOBED].map(|i| per_tile.iter().any(|t| !t[1 + i].points.is_empty()));
         let (mut stats, mut count) = (TraversalStats::default(), 0);
         // The points of list `i` of every tile settled in `cache`.
         let mut settle_in = |cache: &mut Cache, i: usize, gather: &Gather| {
@@ -380,15 +415,17 @@ impl Frame<'_> {
 /// dropped once copied: a frame's points are most of its memory.
 fn settle(
     cache: &mut Cache,
-    per_tile: impl Iterator<Item = Vec<(Vec3, Vec3)>>,
+    per_tile: impl Iterator<Item = TileSamples>,
     gather: &Gather,
     what: Convolution,
 ) -> Result<(Settled, Prepared), RenderError> {
-    let mut starts = vec![0];
-    let mut points = Vec::new();
+    let (mut starts, mut slot_starts) = (vec![0], vec![0]);
+    let (mut points, mut slots) = (Vec::new(), Vec::new());
     for t in per_tile {
-        points.extend_from_slice(&t);
+        points.extend_from_slice(&t.points);
         starts.push(points.len());
+        slots.extend_from_slice(&t.slots);
+        slot_starts.push(slots.len());
     }
     let mut prepared = cache.prepare(&points, gather, what).map_err(|e| match e {
         CacheError::Gather(e) => RenderError::from(e),
@@ -404,6 +441,8 @@ fn settle(
         levels: std::mem::take(&mut prepared.levels),
         marks,
         starts,
+        slots,
+        slot_starts,
     };
     Ok((settled, prepared))
 }

@@ -20,7 +20,7 @@ use super::image::Image;
 use super::light::Lights;
 use super::options::{Crop, RenderOptions};
 use super::output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
-use super::shading::{ShadingPoint, shading_point};
+use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::cache::Cache;
 use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
@@ -28,7 +28,6 @@ use crate::environment::Environment;
 use crate::error::Error;
 use crate::gather::{Gather, Gatherer};
 use crate::microbuffer::{Convolution, MicroBuffer};
-use crate::rng::{Rng, film_point, mix};
 use crate::scene::{Camera, Scene, SceneError};
 use crate::simd::LANES;
 use crate::tree::{Tree, TreeFile};
@@ -65,6 +64,8 @@ pub(crate) struct PacketPoint {
     pub film: (f32, f32),
     pub point: ShadingPoint,
     pub light_first: u32,
+    /// Its light samples, `light_first..light_first + light_count`.
+    pub light_count: u32,
     pub light_scramble: [u32; 2],
 }
 
@@ -88,7 +89,7 @@ pub struct Frame<'s> {
     pub(crate) needs_points: bool,
     /// What the open part of a receiver's hemisphere sees, and camera rays
     /// that leave the scene (none in AO mode).
-    environment: Option<Arc<Environment>>,
+    pub(crate) environment: Option<Arc<Environment>>,
     /// The world-space records gathered so far (`Gathers::Cache`): a
     /// later frame of this bake gathers only what none before it needed.
     pub(super) cache: Mutex<Option<Cache>>,
@@ -321,57 +322,6 @@ impl<'s> Frame<'s> {
             .collect()
     }
 
-    /// One packet: camera sample `s` of each pixel of a tile (stratified over
-    /// the pixel), the rays that hit a visible surface. `misses` (if given)
-    /// gets the others: each pixel's index in the tile and the environment's
-    /// radiance along its ray.
-    pub(crate) fn packet(
-        &self,
-        pixels: &[(u32, u32)],
-        s: u32,
-        mut misses: Option<&mut Vec<(usize, Vec3)>>,
-    ) -> Vec<PacketPoint> {
-        let cam = &self.camera;
-        let rays = cam.rays();
-        let light_first = s.wrapping_mul(self.light_samples());
-        // Each of the pixel's stratified samples filters its own share of
-        // the pixel: together they cover it without blurring past it.
-        let spread = cam.pixel_spread() / (self.opts.spp as f32).sqrt();
-        let mut points = Vec::with_capacity(pixels.len());
-        for (k, &(x, y)) in pixels.iter().enumerate() {
-            let pix = y * cam.width + x;
-            let mut rng = Rng::new(
-                self.opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
-            );
-            let (fx, fy) = film_point(x, y, s, self.opts.spp, &mut rng);
-            let dir = rays.direction(fx, fy);
-            match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
-                Some(hit) => {
-                    if let Some(point) =
-                        shading_point(self.scene, &self.tracer, cam.origin, dir, &hit, spread)
-                    {
-                        // One scramble per pixel: its camera samples' light
-                        // samples are consecutive blocks of one sequence.
-                        let h = mix(self.opts.seed ^ u64::from(pix).wrapping_mul(0xA24B_AED4_963E_E407));
-                        points.push(PacketPoint {
-                            pixel: k,
-                            film: (fx, fy),
-                            point,
-                            light_first,
-                            light_scramble: [h as u32, (h >> 32) as u32],
-                        });
-                    }
-                }
-                None => {
-                    if let (Some(m), Some(env)) = (misses.as_deref_mut(), &self.environment) {
-                        m.push((k, env.radiance(dir)));
-                    }
-                }
-            }
-        }
-        points
-    }
-
     /// Light samples at each camera sample's receiver.
     pub(crate) fn light_samples(&self) -> u32 {
         self.opts.light_samples()
@@ -399,7 +349,7 @@ impl<'s> Frame<'s> {
                         &self.tracer,
                         sp.position,
                         n,
-                        self.light_samples(),
+                        pp.light_count,
                         pp.light_first,
                         pp.light_scramble,
                         f,

@@ -24,6 +24,7 @@ mod bake;
 mod baked;
 mod bounces;
 mod cached;
+mod camera_samples;
 #[cfg(feature = "denoise")]
 mod denoise;
 mod frame;

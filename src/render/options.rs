@@ -164,6 +164,11 @@ pub struct RenderOptions {
     pub bounces: u32,
     /// Camera samples per pixel (antialiasing; each a receiver of direct light).
     pub spp: u32,
+    /// Adaptive camera samples: this many in every pixel first, and `spp`
+    /// only where a pixel's first samples disagree (another surface, a
+    /// step in depth or normal, a hit beside a miss); `None`: `spp` in
+    /// every pixel.
+    pub first_samples: Option<u32>,
     /// Where the indirect light is gathered: at records in world space (the
     /// default), at a sparse, adaptive lattice of pixels, or at every
     /// camera sample.
@@ -339,6 +344,7 @@ impl Default for RenderOptions {
             glossy_cache_roughness: 0.2,
             bounces: 1,
             spp: 4,
+            first_samples: None,
             gathers: Gathers::default(),
             direct_samples: None,
             ao: false,

@@ -59,21 +59,14 @@ impl Frame<'_> {
         // Samples that gather themselves, and those the lattice serves with
         // their irradiance.
         let (mut own, mut served) = (Vec::new(), Vec::new());
-        let mut misses = Vec::new();
-        // Samples that asked `shared`, in order: the cache's answers are
-        // kept in that order.
-        let mut asked = 0;
-        // The same for each incident cache, and the light of the samples
-        // they served.
-        let (mut asked_incident, mut reflected) = ([0; 2], Vec::new());
-        for s in 0..opts.spp {
+        // The light of the samples the incident caches served.
+        let mut reflected = Vec::new();
+        let samples = self.trace_samples(&pixels, |s, mut points, misses| {
             let t0 = Instant::now();
-            misses.clear();
-            let mut points = self.packet(&pixels, s, Some(&mut misses));
             // Camera rays that leave the scene see the environment (light
             // that bounced nowhere: direct).
             if opts.component != Component::Indirect {
-                for &(k, l) in &misses {
+                for &(k, l) in misses {
                     adds[k * spp + s as usize] = l;
                 }
             }
@@ -89,11 +82,12 @@ impl Frame<'_> {
             }
             if self.needs_points {
                 for pp in points {
+                    // Where the cache settled this sample.
+                    let slot = s as usize * pixels.len() + pp.pixel;
                     let sp = &pp.point;
                     let per_sample = self.gathers_per_sample(sp.material);
                     if let Some(i) = self.incident_cache(sp.material).filter(|_| per_sample) {
-                        let l = incident.light(self, i, (tile, asked_incident[i]), &pp)?;
-                        asked_incident[i] += 1;
+                        let l = incident.light(self, i, (tile, slot), &pp)?;
                         match l {
                             Some(l) => reflected.push((s, pp, l)),
                             None => own.push((s, pp, Group::Alone)),
@@ -102,8 +96,7 @@ impl Frame<'_> {
                     }
                     match shared.filter(|_| !per_sample) {
                         Some(l) => {
-                            let from = l.irradiance((tile, asked), pp.film, sp.position, sp.normal, eye)?;
-                            asked += 1;
+                            let from = l.irradiance((tile, slot), pp.film, sp.position, sp.normal, eye)?;
                             match from {
                                 Served::Light(e) => served.push((s, pp, e)),
                                 Served::NoCorner => own.push((s, pp, Group::Pixel)),
@@ -117,7 +110,8 @@ impl Frame<'_> {
                     }
                 }
             }
-        }
+            Ok::<_, RenderError>(direct)
+        })?;
         let mut acc = Gathered {
             adds,
             stats: TraversalStats::default(),
@@ -153,9 +147,10 @@ impl Frame<'_> {
         let out = pixels
             .iter()
             .zip(adds.chunks(spp))
-            .map(|(&(x, y), adds)| {
+            .zip(samples)
+            .map(|((&(x, y), adds), n)| {
                 let sum = adds.iter().fold(Vec3::ZERO, |a, &b| a + b);
-                ((y - window.y0) * w + x - window.x0, sum / opts.spp as f32)
+                ((y - window.y0) * w + x - window.x0, sum / n as f32)
             })
             .collect();
         Ok((out, stats, count))

@@ -175,6 +175,10 @@ pub struct ReportArgs {
 /// option once, its default from [`RenderOptions::default`].
 #[derive(Args, Clone)]
 pub struct Settings {
+    /// Adaptive camera samples: N in every pixel first, the rest of --spp
+    /// only where a pixel's first samples disagree (an edge).
+    #[arg(long, value_name = "N")]
+    pub first_samples: Option<u32>,
     /// Ω: largest solid angle (sr) of a splatted cluster.
     #[arg(long, default_value_t = RenderOptions::default().cut.max_solid_angle)]
     pub max_solid_angle: f32,
@@ -236,6 +240,7 @@ impl Settings {
             glossy_cache_roughness: self.glossy_cache_roughness,
             bounces: self.bounces.unwrap_or(RenderOptions::default().bounces),
             spp,
+            first_samples: self.first_samples,
             density: self.density.unwrap_or(RenderOptions::default().density),
             surfel_budget: self.surfels,
             ..RenderOptions::default()

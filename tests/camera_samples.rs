@@ -1,0 +1,87 @@
+//! Adaptive camera samples (`RenderOptions::first_samples`): the pixels on
+//! an edge take the rest of the samples, and a tile decides as the whole
+//! frame does, bit for bit.
+
+use glam::Vec3;
+use pbgi::render::{Crop, Frame, Image, RenderOptions};
+use pbgi::scene::builtin::cornell_box;
+
+fn options(spp: u32, first_samples: Option<u32>) -> RenderOptions {
+    RenderOptions {
+        spp,
+        first_samples,
+        ..Default::default()
+    }
+}
+
+fn render(opts: &RenderOptions) -> Image {
+    let scene = cornell_box();
+    Frame::prepare(&scene, opts)
+        .unwrap()
+        .render(&|_, _| {})
+        .unwrap()
+        .image
+}
+
+/// RMSE over `pixels` of `image` against `truth`.
+fn rmse(image: &Image, truth: &Image, pixels: &[usize]) -> f32 {
+    let sum: f32 = pixels
+        .iter()
+        .map(|&i| (image.pixels[i] - truth.pixels[i]).length_squared())
+        .sum();
+    (sum / pixels.len() as f32).sqrt()
+}
+
+#[test]
+fn the_pixels_on_an_edge_take_the_rest_of_the_samples() {
+    let scene = cornell_box();
+    let truth = render(&options(64, None));
+    // Edge pixels: the 64-sample albedo guide is no single material's (nor
+    // the black of a miss): the pixel holds two surfaces.
+    let guides = Frame::prepare(&scene, &options(64, None)).unwrap().guides();
+    let pure = |a: Vec3| a == Vec3::ZERO || scene.materials.iter().any(|m| a.abs_diff_eq(m.albedo, 1e-4));
+    let edges: Vec<usize> = (0..guides.albedo.pixels.len())
+        .filter(|&i| !pure(guides.albedo.pixels[i]))
+        .collect();
+    assert!(edges.len() > 1000, "{} edge pixels", edges.len());
+    let two = rmse(&render(&options(2, None)), &truth, &edges);
+    let sixteen = rmse(&render(&options(16, None)), &truth, &edges);
+    let adaptive = rmse(&render(&options(16, Some(2))), &truth, &edges);
+    assert!(
+        adaptive < 0.5 * two && adaptive < 1.3 * sixteen,
+        "RMSE on the edges: 2 spp {two:.4}, 16 spp {sixteen:.4}, 2 then 16 {adaptive:.4}"
+    );
+}
+
+#[test]
+fn an_adaptive_tile_is_its_part_of_the_full_frame_bit_for_bit() {
+    let mut scene = cornell_box();
+    (scene.camera.width, scene.camera.height) = (96, 96);
+    let full_opts = options(8, Some(2));
+    let full = Frame::prepare(&scene, &full_opts)
+        .unwrap()
+        .render(&|_, _| {})
+        .unwrap()
+        .image;
+    let (x0, y0, x1, y1) = (21, 30, 70, 77);
+    let crop = RenderOptions {
+        crop: Some(Crop { x0, y0, x1, y1 }),
+        ..full_opts
+    };
+    let part = Frame::prepare(&scene, &crop)
+        .unwrap()
+        .render(&|_, _| {})
+        .unwrap()
+        .image;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let a = full.pixels[(y * 96 + x) as usize];
+            let b = part.pixels[((y - y0) * (x1 - x0) + x - x0) as usize];
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits),
+                "pixel ({x}, {y})"
+            );
+        }
+    }
+}
