@@ -55,6 +55,7 @@ use blend::{Around, Blend};
 pub use file::CacheFileError;
 use grid::{Grid, Key, KeyMap, cell_of, key};
 pub use record::Record;
+#[cfg(feature = "render")]
 pub(crate) use record::same_surface;
 
 /// Settings of a [`Cache`].
