@@ -32,6 +32,18 @@ struct Seen {
     direct: Vec3,
 }
 
+impl Seen {
+    /// What sample `pp` saw, its direct light not yet known.
+    fn of(pp: &PacketPoint) -> Seen {
+        Seen {
+            position: pp.point.position,
+            normal: pp.point.normal,
+            material: pp.point.material,
+            direct: Vec3::ZERO,
+        }
+    }
+}
+
 impl Frame<'_> {
     /// One packet: camera sample `s` of each pixel of a tile (stratified over
     /// the pixel), the rays that hit a visible surface. `misses` (if given)
@@ -154,12 +166,7 @@ impl Frame<'_> {
             let mut hit = vec![None; pixels.len()];
             if first < spp {
                 for pp in &points {
-                    hit[pp.pixel] = Some(Seen {
-                        position: pp.point.position,
-                        normal: pp.point.normal,
-                        material: pp.point.material,
-                        direct: Vec3::ZERO,
-                    });
+                    hit[pp.pixel] = Some(Seen::of(pp));
                 }
             }
             let order: Vec<usize> = points.iter().map(|pp| pp.pixel).collect();
@@ -217,33 +224,30 @@ impl Frame<'_> {
                 }
             }
         }
-        let mut around: Vec<Vec<Option<Seen>>> = vec![Vec::new(); outside.len()];
+        // The tile's pixels and then their neighbours outside it, each with
+        // what its first samples saw.
+        let mut all: Vec<Vec<Option<Seen>>> = seen.to_vec();
+        all.resize(pixels.len() + outside.len(), Vec::new());
         for s in 0..self.first_samples() {
             let mut hit = vec![None; outside.len()];
             for pp in self.packet_of(&outside, s, None, None) {
-                hit[pp.pixel] = Some(Seen {
-                    position: pp.point.position,
-                    normal: pp.point.normal,
-                    material: pp.point.material,
-                    direct: Vec3::ZERO,
-                });
+                hit[pp.pixel] = Some(Seen::of(&pp));
             }
             for (k, h) in hit.into_iter().enumerate() {
-                around[k].push(h);
+                all[pixels.len() + k].push(h);
             }
         }
+        let index = |q: (u32, u32)| {
+            at(q.0, q.1).or_else(|| outside.iter().position(|&o| o == q).map(|j| pixels.len() + j))
+        };
         pixels
             .iter()
             .enumerate()
             .map(|(k, &p)| {
                 disagree(&seen[k], slack)
-                    || beside(p).any(|q| {
-                        let other = match at(q.0, q.1) {
-                            Some(j) => &seen[j],
-                            None => &around[outside.iter().position(|&o| o == q).unwrap_or(0)],
-                        };
-                        seen[k].iter().any(|a| other.iter().any(|b| apart(a, b, slack)))
-                    })
+                    || beside(p)
+                        .filter_map(index)
+                        .any(|j| seen[k].iter().any(|a| all[j].iter().any(|b| apart(a, b, slack))))
             })
             .collect()
     }
