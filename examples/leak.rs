@@ -22,7 +22,7 @@
 use glam::Vec3;
 use pbgi::brdf::lambert_sample;
 use pbgi::gather::{Gather, GatherOptions};
-use pbgi::render::{BakeOptions, Lights, NearRays, Tracer, bake};
+use pbgi::render::{BakeOptions, Brdf, LightSamples, Lights, NearRays, Tracer, bake};
 use pbgi::rng::Rng;
 use pbgi::{PointCloud, Surfel, Tree};
 
@@ -151,10 +151,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if !inside(q) {
                 continue;
             }
-            let f = material.albedo * std::f32::consts::FRAC_1_PI;
             // One area-light sample per ray, each its own point of the sequence.
-            let scramble = [rng.f32().to_bits(), rng.f32().to_bits()];
-            let l = mean(lights.reflected(&tracer, q + ng * tracer.epsilon(), ng, 1, i, scramble, |_| f));
+            let samples = LightSamples {
+                count: 1,
+                first: i,
+                scramble: [rng.f32().to_bits(), rng.f32().to_bits()],
+                ratio: false,
+            };
+            let l = mean(lights.reflected(
+                &tracer,
+                q + ng * tracer.epsilon(),
+                ng,
+                samples,
+                Brdf::lambert(material.albedo),
+            ));
             sum += l;
             for (w, k) in within.iter_mut().zip([2.0, 4.0]) {
                 if hit.t < k * radius {

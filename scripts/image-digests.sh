@@ -13,6 +13,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cases=(
     "cornell-box"
+    "cornell-box --direct sampled"
     "cornell-box --gathers all"
     "cornell-box --gathers sparse"
     "cornell-box --gathers cache:0.1"

@@ -8,7 +8,7 @@
 use crate::common;
 
 use pbgi::CutOptions;
-use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions, RenderOutput, render};
+use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Direct, Gathers, RenderOptions, RenderOutput, render};
 use pbgi::scene::Scene;
 use pbgi::scene::builtin::cornell_box;
 
@@ -233,7 +233,8 @@ fn a_gather_per_camera_sample_is_the_dense_render_bit_for_bit() {
     // while ray hits used glam's `Vec3A`, whose NEON cross product fuses a
     // multiply-subtract.
     // Pinned at Ω 0.05, N 24 (the render's defaults then, its Ω and N
-    // now), so that the digest keeps guarding the gather.
+    // now), and with the direct light sampled as it was then, so that the
+    // digest keeps guarding the gather.
     let s = scene(cornell_box(), 24, 20);
     let opts = |gathers| RenderOptions {
         gathers,
@@ -243,6 +244,7 @@ fn a_gather_per_camera_sample_is_the_dense_render_bit_for_bit() {
             ..CutOptions::default()
         },
         microbuffer: 24,
+        direct: Direct::Sampled,
         ..Default::default()
     };
     let dense = run(&s, opts(Gathers::All));

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::light::{Lights, triangle};
+use super::light::{Brdf, LightSamples, Lights, triangle};
 use super::trace::Tracer;
 use crate::error::{Error, Invalid};
 use crate::gather::morton_codes;
@@ -336,7 +336,6 @@ pub(super) fn bake_reporting(
             };
             let albedo = material.albedo_at(mesh, &at);
             let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            let f = albedo * std::f32::consts::FRAC_1_PI;
             let scramble = [h as u32, (h >> 32) as u32];
             let radiance = if albedo.max_element() <= 0.0 {
                 Vec3::ZERO
@@ -350,11 +349,23 @@ pub(super) fn bake_reporting(
                     let x = (k as f64 + (j as f64 + 0.5) / spread as f64) * share;
                     let w = radical_inverse(j, scramble[1]);
                     let (at, n, _) = pool.point(scene, x, w);
-                    sum += lights.reflected(tracer, at, n, opts.light_samples.min(1), j, scramble, |_| f);
+                    let samples = LightSamples {
+                        count: opts.light_samples.min(1),
+                        first: j,
+                        scramble,
+                        ratio: false,
+                    };
+                    sum += lights.reflected(tracer, at, n, samples, Brdf::lambert(albedo));
                 }
                 sum / spread as f32
             } else {
-                lights.reflected(tracer, position, normal, opts.light_samples, 0, scramble, |_| f)
+                let samples = LightSamples {
+                    count: opts.light_samples,
+                    first: 0,
+                    scramble,
+                    ratio: false,
+                };
+                lights.reflected(tracer, position, normal, samples, Brdf::lambert(albedo))
             };
             if !radiance.is_finite() {
                 return Err(Error::InvalidSurfel {

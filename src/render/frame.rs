@@ -17,8 +17,8 @@ use super::baked::{
     needs_points, tracer_and_lights,
 };
 use super::image::Image;
-use super::light::Lights;
-use super::options::{Crop, RenderOptions};
+use super::light::{Brdf, LightSamples, Lights};
+use super::options::{Crop, Direct, RenderOptions};
 use super::output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
@@ -182,6 +182,14 @@ impl<'s> Frame<'s> {
                 }
             }),
         });
+        stages.push(Stage {
+            name: "area lights in closed form, times the samples' shadow ratio",
+            skipped: match (opts.ao, opts.direct) {
+                (true, _) => Some("AO mode".to_string()),
+                (false, Direct::Sampled) => Some("--direct sampled".to_string()),
+                (false, Direct::Ratio) => lights.why_sampled(),
+            },
+        });
         Ok(Frame {
             scene,
             camera: scene.camera,
@@ -338,22 +346,18 @@ impl<'s> Frame<'s> {
                 let sp = &pp.point;
                 let m = &self.scene.materials[sp.material];
                 let lobe = m.lobe();
-                let fd = sp.albedo * std::f32::consts::FRAC_1_PI;
                 let (n, wo) = (sp.normal, sp.wo);
-                let f = |wi: Vec3| match &lobe {
-                    Some(l) => fd + l.eval(n, wo, wi),
-                    None => fd,
+                let brdf = Brdf {
+                    diffuse: sp.albedo * std::f32::consts::FRAC_1_PI,
+                    lobe: lobe.as_ref().map(|l| move |wi| l.eval(n, wo, wi)),
                 };
-                sp.emitted
-                    + self.lights.reflected(
-                        &self.tracer,
-                        sp.position,
-                        n,
-                        pp.light_count,
-                        pp.light_first,
-                        pp.light_scramble,
-                        f,
-                    )
+                let samples = LightSamples {
+                    count: pp.light_count,
+                    first: pp.light_first,
+                    scramble: pp.light_scramble,
+                    ratio: self.opts.direct == Direct::Ratio,
+                };
+                sp.emitted + self.lights.reflected(&self.tracer, sp.position, n, samples, brdf)
             })
             .collect()
     }

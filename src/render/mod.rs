@@ -50,10 +50,10 @@ pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use guides::Guides;
 pub use image::Image;
-pub use light::Lights;
+pub use light::{ANALYTIC_TRIANGLES, Brdf, LightSamples, Lights};
 pub use near::NearRays;
 pub use options::{
-    Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Gathers, RenderOptions,
+    Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Direct, Gathers, RenderOptions,
 };
 pub use output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};

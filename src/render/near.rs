@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::frame::Frame;
-use super::light::Lights;
+use super::light::{Brdf, LightSamples, Lights};
 use super::trace::Tracer;
 use crate::microbuffer::{NearField, Sight};
 use crate::points::MAX_RADIANCE;
@@ -74,16 +74,15 @@ impl NearField for NearRays<'_> {
         let h = mix(self.seed
             ^ (u64::from(q.x.to_bits()) | u64::from(q.y.to_bits()) << 32)
             ^ u64::from(q.z.to_bits()).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let f = albedo * std::f32::consts::FRAC_1_PI;
-        let l = self.lights.reflected(
-            self.tracer,
-            q,
-            ng,
-            self.light_samples,
-            0,
-            [h as u32, (h >> 32) as u32],
-            |_| f,
-        );
+        let samples = LightSamples {
+            count: self.light_samples,
+            first: 0,
+            scramble: [h as u32, (h >> 32) as u32],
+            ratio: false,
+        };
+        let l = self
+            .lights
+            .reflected(self.tracer, q, ng, samples, Brdf::lambert(albedo));
         // Saturates as the surfels do (`bake`); a non-finite value is kept,
         // for the gather's own report to name (`min` would hide a NaN).
         let max = Vec3::splat(MAX_RADIANCE);

@@ -124,6 +124,30 @@ impl std::fmt::Display for Gathers {
     }
 }
 
+/// How a camera sample's area-light samples make its direct light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Direct {
+    /// `Σ f·Li·cosθ / pdf` over the samples, shadowed ones giving nothing.
+    Sampled,
+    /// The diffuse part in closed form, shadows aside (Lambert's polygon
+    /// formula), times the share of the samples' unshadowed light that
+    /// reaches the point (Heitz et al. 2018's ratio estimator): no noise
+    /// where every sample is lit or none is. A glossy lobe keeps the
+    /// plain estimate; scenes of many emissive triangles too
+    /// ([`crate::render::ANALYTIC_TRIANGLES`]).
+    #[default]
+    Ratio,
+}
+
+impl std::fmt::Display for Direct {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Direct::Sampled => "sampled",
+            Direct::Ratio => "ratio",
+        })
+    }
+}
+
 /// Area-light samples per receiver when `RenderOptions::direct_samples` is `None`.
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
@@ -178,6 +202,8 @@ pub struct RenderOptions {
     /// light costs a few shadow rays where a gather costs a microbuffer, so
     /// its noise is cheap to take out.
     pub direct_samples: Option<u32>,
+    /// How the direct light combines those samples.
+    pub direct: Direct,
     /// Ambient-occlusion mode: no radiance at all, `1 − AO` as a grey image.
     pub ao: bool,
     /// Surfels per unit area, when there is no `surfel_budget`.
@@ -347,6 +373,7 @@ impl Default for RenderOptions {
             first_samples: None,
             gathers: Gathers::default(),
             direct_samples: None,
+            direct: Direct::default(),
             ao: false,
             density: 2000.0,
             surfel_budget: None,

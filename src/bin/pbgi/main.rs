@@ -14,6 +14,7 @@ mod path;
 mod progress;
 mod report;
 mod scale;
+mod view;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

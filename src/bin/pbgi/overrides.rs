@@ -2,7 +2,8 @@
 //! (`--resolution`, `--camera-*`, `--fov`), and the samples and bounces a
 //! scene file asks for where `--spp` and `--bounces` are not given.
 
-use crate::args::{Res, ViewArgs};
+use crate::args::Res;
+use crate::view::ViewArgs;
 
 /// The camera as `--resolution`, `--camera-origin`, `--camera-target` and
 /// `--fov` change it (the field of view stays on its axis); an unusable
