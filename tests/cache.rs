@@ -273,7 +273,7 @@ fn the_naves_cache_stays_near_the_dense_render() {
 /// samples: the relative RMSE, and the share of the dense render's gathers
 /// it made.
 fn against_dense(name: &str, s: &Scene, opts: RenderOptions) -> (f64, f64) {
-    use crate::gathers::{luminance, relative_error};
+    use crate::render_gathers::{luminance, relative_error};
     let cached = render(s, &opts, &|_, _| {}).unwrap();
     let dense = render(
         s,

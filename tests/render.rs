@@ -382,7 +382,7 @@ fn occlusion_images_match_the_open_box_form_factor() {
         // this test's 32×32 pixels the occlusion changes between lattice
         // points 4 pixels apart more than at any real resolution, and
         // bilinear interpolation of its dome-shaped profile biases the mean
-        // by −0.9 % (dense −0.59 %, sparse −1.48 %; tests/gathers.rs holds
+        // by −0.9 % (dense −0.59 %, sparse −1.48 %; tests/render_gathers.rs holds
         // interpolation to the dense render at real resolutions).
         gathers: Gathers::All,
         ..Default::default()
@@ -415,7 +415,7 @@ fn a_uniform_sky_lights_the_open_box_by_the_form_factor_of_its_opening() {
         bounces: 0,
         // A gather at every camera sample: this measures the gather, and at
         // this test's coarse pixels the irradiance varies between pixels
-        // more than interpolation keeps (tests/gathers.rs measures that).
+        // more than interpolation keeps (tests/render_gathers.rs measures that).
         gathers: Gathers::All,
         ..Default::default()
     };

@@ -3,7 +3,7 @@
 //! (with fat LTO under `--release`, about 30 s apiece), so one binary
 //! keeps the README's test command's links to a few. A file's tests are
 //! named after it:
-//! `cargo test --profile quick --test suite -- gathers::` runs `tests/gathers.rs`.
+//! `cargo test --profile quick --test suite -- render_gathers::` runs `tests/render_gathers.rs`.
 
 mod common;
 
@@ -17,13 +17,13 @@ mod cut_equivalence;
 mod denoise;
 mod exact;
 mod gather;
-mod gathers;
 mod gltf;
 mod guides;
 mod hiding;
 mod inputs;
 mod reference;
 mod render;
+mod render_gathers;
 mod report;
 mod scene_loaders;
 mod scenes;

@@ -1,399 +1,471 @@
-//! Baking a scene into surfels: stratified area-uniform sampling of every
-//! surface (triangles smaller than a surfel pooled, so the count follows the
-//! density, not the triangles) and direct light at each surfel through
-//! shadow rays.
+//! The surfels and their tree as a render needs them: built (surfels with
+//! direct light, the environment's light and extra bounces gathered at
+//! them, the tree), or read from a tree file baked earlier ([`bake_tree`],
+//! `pbgi bake`) after checking that it was baked from this scene with these
+//! settings.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
 
-use glam::{Vec2, Vec3};
-use rayon::prelude::*;
+use glam::Vec3;
 
-use super::light::{Brdf, LightSamples, Lights, triangle};
+use super::bounces::{SkyRays, gather_bounce, gather_sky};
+use super::light::Lights;
+use super::options::{Gathers, RenderOptions};
+use super::output::{PreTimings, Progress, RenderError, Stage};
+use super::surfels::{BakeOptions, bake_with_progress};
 use super::trace::Tracer;
-use crate::error::{Error, Invalid};
-use crate::gather::morton_codes;
-use crate::points::{MAX_RADIANCE, PointCloud, Surfel};
-use crate::rng::{Rng, mix};
-use crate::scene::{Scene, SurfacePoint};
+use crate::cut::SchemeChoice;
+use crate::environment::Environment;
+use crate::error::Error;
+use crate::gather::{GatherOptions, ReceiverOrder};
+use crate::points::{PointCloud, Surfel};
+use crate::scene::{Light, Scene};
+use crate::simd::LANES;
+use crate::tree::file::Fnv1a;
+use crate::tree::{BakeRecord, Tree, TreeFile};
 
-/// Surfels between two progress reports.
-const TICK: usize = 4096;
-
-/// How a scene is turned into surfels.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BakeOptions {
-    /// Surfels per unit of surface area.
-    pub density: f32,
-    /// Area-light samples per surfel.
-    pub light_samples: u32,
-    /// Seed of every random choice (results do not depend on thread count).
-    pub seed: u64,
-}
-
-impl Default for BakeOptions {
-    fn default() -> Self {
-        Self {
-            density: 4000.0,
-            light_samples: 16,
-            seed: 1,
-        }
+/// The gather options of a render: its cut, microbuffer and environment,
+/// over coherent packets (screen tiles; surfels in tree order).
+pub(super) fn gather_options(
+    opts: &RenderOptions,
+    scheme: SchemeChoice,
+    environment: &Option<Arc<Environment>>,
+) -> GatherOptions {
+    GatherOptions {
+        cut: opts.cut,
+        microbuffer: opts.microbuffer,
+        scheme,
+        order: ReceiverOrder::Coherent,
+        environment: environment.clone(),
+        // The renderer's pool.
+        threads: None,
     }
 }
 
-/// Surfels with what shading them again needs.
-#[derive(Clone, Debug)]
-pub struct Baked {
-    /// The surfels; their radiance is the reflected direct light (emission is
-    /// left out: the renderer adds direct light with shadow rays).
-    pub cloud: PointCloud,
-    /// Diffuse albedo of each surfel, for extra bounces.
-    pub albedo: Vec<Vec3>,
-}
-
-/// A low-discrepancy point in the unit square (Hammersley with a scramble).
-fn hammersley(i: u32, n: u32, scramble: u32) -> Vec2 {
-    Vec2::new((i as f32 + 0.5) / n as f32, radical_inverse(i, scramble))
-}
-
-/// Van der Corput's radical inverse of `i` in base 2, digits XORed with
-/// `scramble`: in `[0, 1)`.
-fn radical_inverse(i: u32, scramble: u32) -> f32 {
-    (i.reverse_bits() ^ scramble) as f32 * (1.0 / 4_294_967_296.0)
-}
-
-/// A triangle's place: its mesh and its index there.
-type TriangleRef = (u32, u32);
-
-/// The triangles of one material too small for a surfel of their own (less
-/// than one surfel's area at the density), sampled together by area: the
-/// budget holds however finely a surface is cut. Ordered by the axis they
-/// face most (so a surfel never averages the two sides of a thin part)
-/// and then along a Morton curve, surfel `k` of `count` stands for the
-/// `k`-th equal share of their summed area: a compact patch of neighbours.
-struct Pool {
-    material: usize,
-    triangles: Vec<TriangleRef>,
-    /// Twice the area and the unit normal of each of `triangles`.
-    shapes: Vec<(f32, Vec3)>,
-    /// The summed area at each triangle's end.
-    ends: Vec<f64>,
-    count: u32,
-    scramble: u32,
-}
-
-impl Pool {
-    /// The area each surfel stands for.
-    fn share(&self) -> f64 {
-        self.ends.last().copied().unwrap_or(0.0) / self.count as f64
-    }
-
-    /// The summed area at triangle `t`'s start.
-    fn start(&self, t: usize) -> f64 {
-        if t == 0 { 0.0 } else { self.ends[t - 1] }
-    }
-
-    /// The point at summed area `x` (in `[0, area)`), `w` the second
-    /// coordinate across its triangle, with that triangle's normal and
-    /// where on it the point is.
-    fn point(&self, scene: &Scene, x: f64, w: f32) -> (Vec3, Vec3, Place) {
-        let t = self.ends.partition_point(|&e| e <= x).min(self.ends.len() - 1);
-        let (m, i) = self.triangles[t];
-        let mesh = &scene.meshes[m as usize];
-        let v = mesh.triangles[i as usize].map(|i| mesh.positions[i as usize]);
-        let (twice_area, normal) = self.shapes[t];
-        // The fraction of the triangle's area swept from its first vertex
-        // is the square of the first coordinate of the area-preserving map.
-        let u = ((x - self.start(t)) / (0.5 * twice_area as f64)).clamp(0.0, 1.0) as f32;
-        let (p, bary) = on_triangle(v, u, w);
-        (p, normal, ((m, i), bary))
-    }
-
-    /// Surfel `k`: a point at the middle of its share, the area-weighted
-    /// normal of the share, and the radius of a disk of the share's area.
-    fn site(&self, scene: &Scene, k: u32) -> Own {
-        let share = self.share();
-        let (lo, hi) = (k as f64 * share, (k + 1) as f64 * share);
-        let mut t = self.ends.partition_point(|&e| e <= lo);
-        let mut sum = Vec3::ZERO;
-        while t < self.ends.len() && self.start(t) < hi {
-            let overlap = self.ends[t].min(hi) - self.start(t).max(lo);
-            sum += self.shapes[t].1 * overlap as f32;
-            t += 1;
-        }
-        let w = radical_inverse(k, self.scramble);
-        let (position, own, place) = self.point(scene, (k as f64 + 0.5) * share, w);
-        let normal = sum.try_normalize().unwrap_or(own);
-        let radius = (share / std::f64::consts::PI).sqrt() as f32;
-        (position, normal, radius, self.material, place)
-    }
-}
-
-/// The point of triangle `v` at `(u, w)` of the unit square, mapped
-/// area-preservingly, and its barycentric coordinates of vertices 1 and 2.
-fn on_triangle(v: [Vec3; 3], u: f32, w: f32) -> (Vec3, Vec2) {
-    let su = u.sqrt();
-    let (b0, b1) = (1.0 - su, w * su);
-    let b2 = 1.0 - b0 - b1;
-    (v[0] * b0 + v[1] * b1 + v[2] * b2, Vec2::new(b1, b2))
-}
-
-/// Which of six directions (+x, +y, +z, −x, −y, −z: neighbours in this
-/// order are never opposite) a normal faces most.
-fn facing(n: Vec3) -> u8 {
-    let a = n.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
+/// What the open part of a receiver's hemisphere sees (none in AO mode).
+pub(super) fn environment(scene: &Scene, opts: &RenderOptions) -> Option<Arc<Environment>> {
+    if opts.ao {
+        None
     } else {
-        2
-    };
-    axis + if n[axis as usize] < 0.0 { 3 } else { 0 }
-}
-
-/// A triangle and barycentric coordinates on it (for texture lookups).
-type Place = (TriangleRef, Vec2);
-
-/// Position, normal, radius, material and place of a surfel.
-type Own = (Vec3, Vec3, f32, usize, Place);
-
-/// A surfel: a large triangle's, or the `k`-th of a pool.
-#[derive(Clone, Copy)]
-enum Site {
-    Own(Own),
-    Pooled { pool: usize, k: u32 },
-}
-
-/// Where the surfels go: one or more on each triangle of at least a
-/// surfel's area, and the pools of the smaller ones.
-struct Sites {
-    own: Vec<Own>,
-    pools: Vec<Pool>,
-}
-
-fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
-    // Per triangle, twice its area and its normal (`None`: no area).
-    let shapes: Vec<Vec<Option<(f32, Vec3)>>> = scene
-        .meshes
-        .iter()
-        .map(|m| {
-            m.triangles
-                .par_iter()
-                .map(|t| triangle(t.map(|i| m.positions[i as usize])))
-                .collect()
-        })
-        .collect();
-    let density = opts.density as f64;
-    let mut expected = scene.materials.len() as f64;
-    for shape in shapes.iter().flatten().flatten() {
-        expected += 0.5 * shape.0 as f64 * density;
+        scene.environment.clone().map(Arc::new)
     }
-    if expected > PointCloud::MAX_SURFELS as f64 {
-        return Err(Error::TooManySurfels {
-            count: expected.min(usize::MAX as f64) as usize,
-            max: PointCloud::MAX_SURFELS,
-        });
+}
+
+/// Whether the render gathers at all: the environment's light arrives
+/// through the gather, so it needs the surfels (as occluders) even without
+/// bounces.
+pub(super) fn needs_points(opts: &RenderOptions, environment: &Option<Arc<Environment>>) -> bool {
+    opts.ao || opts.bounces > 0 || environment.is_some()
+}
+
+/// A gather threshold: finite, at least 0.
+fn check_threshold(threshold: f32) -> Result<(), RenderError> {
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "gather threshold",
+            value: threshold.to_string(),
+            expected: "a finite relative change of at least 0",
+        }
+        .into());
     }
-    // Per large triangle, a count from its area (stochastic rounding),
-    // stratified with a scrambled Hammersley set mapped area-preservingly.
-    let mut own = Vec::new();
-    let mut small: Vec<Vec<(TriangleRef, (f32, Vec3))>> = vec![Vec::new(); scene.materials.len()];
-    let mut tri_seed = Rng::new(opts.seed);
-    for (m, (mesh, shape)) in scene.meshes.iter().zip(&shapes).enumerate() {
-        for (t, (tri, shape)) in mesh.triangles.iter().zip(shape).enumerate() {
-            let Some((twice_area, normal)) = *shape else {
-                continue;
-            };
-            let area = 0.5 * twice_area;
-            let want = area * opts.density;
-            if want < 1.0 {
-                small[mesh.material].push(((m as u32, t as u32), (twice_area, normal)));
-                continue;
+    Ok(())
+}
+
+/// Checks the scene and the options a render and a bake share.
+pub(super) fn check_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
+    scene.validate()?;
+    if opts.spp == 0 {
+        return Err(Error::InvalidParameter {
+            name: "spp",
+            value: "0".into(),
+            expected: "at least 1",
+        }
+        .into());
+    }
+    if let Some(n @ (0 | 1)) = opts.first_samples {
+        return Err(Error::InvalidParameter {
+            name: "first samples",
+            value: n.to_string(),
+            expected: "at least 2 (a pixel's samples are compared)",
+        }
+        .into());
+    }
+    if let Gathers::Sparse { spacing, threshold } = opts.gathers {
+        if !(spacing.is_power_of_two() && spacing <= 64) {
+            return Err(Error::InvalidParameter {
+                name: "gather spacing",
+                value: spacing.to_string(),
+                expected: "a power of two from 1 to 64 pixels",
             }
-            let v = tri.map(|i| mesh.positions[i as usize]);
-            let extra = if tri_seed.f32() < want.fract() { 1.0 } else { 0.0 };
-            let n = (want.floor() + extra) as u32;
-            // In f64: the radius of a tiny triangle's disk must not underflow.
-            let radius = (area as f64 / (n as f64 * std::f64::consts::PI)).sqrt() as f32;
-            let scramble = tri_seed.next_u64() as u32;
-            for i in 0..n {
-                let u = hammersley(i, n, scramble);
-                let (p, bary) = on_triangle(v, u.x, u.y);
-                own.push((p, normal, radius, mesh.material, ((m as u32, t as u32), bary)));
+            .into());
+        }
+        check_threshold(threshold)?;
+    }
+    if let Gathers::Cache { threshold } = opts.gathers {
+        check_threshold(threshold)?;
+    }
+    opts.surfel_density(scene)?;
+    crate::microbuffer::MicroBuffer::new(opts.microbuffer)?;
+    crate::microbuffer::MicroBuffer::new(opts.glossy_microbuffer)?;
+    for (name, v) in [
+        ("glossy_max_solid_angle", opts.glossy_max_solid_angle),
+        ("glossy_light_offset", opts.glossy_light_offset),
+        ("glossy_cache_roughness", opts.glossy_cache_roughness),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name,
+                value: v.to_string(),
+                expected: "a finite number ≥ 0",
             }
+            .into());
         }
     }
-    let pools = small
-        .into_iter()
-        .enumerate()
-        .filter(|(_, triangles)| !triangles.is_empty())
-        .map(|(material, triangles)| pool(scene, material, triangles, opts))
-        .collect();
-    Ok(Sites { own, pools })
-}
-
-/// The pool of `material`'s small `triangles` (with twice their area and
-/// their normal): ordered, summed, counted.
-fn pool(
-    scene: &Scene,
-    material: usize,
-    triangles: Vec<(TriangleRef, (f32, Vec3))>,
-    opts: &BakeOptions,
-) -> Pool {
-    let centroid = |&((m, t), _): &(TriangleRef, (f32, Vec3))| {
-        let mesh = &scene.meshes[m as usize];
-        mesh.triangles[t as usize]
-            .iter()
-            .map(|&i| mesh.positions[i as usize])
-            .sum::<Vec3>()
-            / 3.0
-    };
-    let codes = morton_codes(triangles.iter().map(centroid));
-    let mut keyed: Vec<(u8, u64, TriangleRef, (f32, Vec3))> = triangles
-        .iter()
-        .zip(codes)
-        .map(|(&(r, shape), code)| (facing(shape.1), code, r, shape))
-        .collect();
-    // The key and the place decide the order; the shape follows the place.
-    keyed.par_sort_unstable_by_key(|&(facing, code, r, _)| (facing, code, r));
-    let mut sum = 0.0f64;
-    let ends = keyed
-        .iter()
-        .map(|&(.., (twice_area, _))| {
-            sum += 0.5 * twice_area as f64;
-            sum
-        })
-        .collect();
-    let mut rng = Rng::new(mix(
-        opts.seed ^ (material as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-    ));
-    let want = sum * opts.density as f64;
-    let count = want.floor() as u32 + u32::from((rng.f32() as f64) < want.fract());
-    Pool {
-        material,
-        triangles: keyed.iter().map(|&(_, _, r, _)| r).collect(),
-        shapes: keyed.iter().map(|&(.., shape)| shape).collect(),
-        ends,
-        count,
-        scramble: rng.next_u64() as u32,
+    if let Some(crop) = opts.crop {
+        crop.within(scene.camera.width, scene.camera.height)?;
     }
+    Ok(())
 }
 
-/// Samples the surfels of `scene` and lights them directly (`scene` valid,
-/// see [`Scene::validate`]). A triangle of at least a surfel's area gets
-/// surfels of its own; smaller ones share theirs, each surfel standing for
-/// an equal share of their area (its normal their average over it, its
-/// light the average of its light samples spread over it), so the count is
-/// the density's whatever the number of triangles. Errors: a density that
-/// is not a finite positive number, or one that asks for more than
-/// [`PointCloud::MAX_SURFELS`] surfels (counted before anything is
-/// allocated).
-pub fn bake(scene: &Scene, tracer: &Tracer, lights: &Lights, opts: &BakeOptions) -> Result<Baked, Error> {
-    bake_reporting(scene, tracer, lights, opts, &|_, _| {})
+/// The stages [`build`] tells its [`Progress`] of.
+const TRACER: &str = "ray-tracing BVH";
+pub(super) const SURFELS: &str = "surfels + direct light";
+pub(super) const SKY: &str = "environment at surfels";
+pub(super) const BOUNCE: &str = "bounce at surfels";
+pub(super) const TREE: &str = "tree";
+
+/// The ray queries and the lights of `scene`, reported as one stage.
+pub(super) fn tracer_and_lights(scene: &Scene, progress: &Progress) -> (Tracer, Lights) {
+    progress(TRACER, 0, 1);
+    let tracer = Tracer::new(scene);
+    let lights = Lights::new(scene);
+    progress(TRACER, 1, 1);
+    (tracer, lights)
 }
 
-/// [`bake`], calling `tick(done, total)` as the surfels' light is done.
-pub(super) fn bake_reporting(
+/// Surfels with direct light, the environment's light and extra bounces
+/// gathered at them, and their tree (an empty cloud when the render needs
+/// none); `stages` gets what ran and what was left out, `times` the seconds
+/// of each part, `progress` where it is.
+pub(super) fn build(
     scene: &Scene,
+    opts: &RenderOptions,
     tracer: &Tracer,
     lights: &Lights,
-    opts: &BakeOptions,
-    tick: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Baked, Error> {
-    if !(opts.density.is_finite() && opts.density > 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "density",
-            value: opts.density.to_string(),
-            expected: "a finite number > 0 (surfels per unit area)",
+    stages: &mut Vec<Stage>,
+    times: &mut PreTimings,
+    progress: &Progress,
+) -> Result<(PointCloud, Tree), Error> {
+    let environment = environment(scene, opts);
+    if !needs_points(opts, &environment) {
+        stages.push(Stage {
+            name: "surfels, tree and cuts",
+            skipped: Some("--bounces 0: direct light only".into()),
         });
+        return Ok((PointCloud::default(), Tree::default()));
     }
-    let Sites { own, pools } = sites(scene, opts)?;
-    let pooled = pools
-        .iter()
-        .enumerate()
-        .flat_map(|(pool, p)| (0..p.count).map(move |k| Site::Pooled { pool, k }));
-    let all: Vec<Site> = own.iter().map(|&s| Site::Own(s)).chain(pooled).collect();
-    let done = AtomicUsize::new(0);
-    tick(0, all.len());
-    let baked: Vec<Option<(Surfel, Vec3)>> = all
-        .par_iter()
-        .enumerate()
-        .map(|(i, &site)| {
-            let (position, normal, radius, material, ((m, t), bary)) = match site {
-                Site::Own(s) => s,
-                Site::Pooled { pool, k } => pools[pool].site(scene, k),
-            };
-            let (mesh, material) = (&scene.meshes[m as usize], &scene.materials[material]);
-            // No surfel on a cut-out's holes; a texture averaged over the
-            // surfel's disk.
-            if !material.opaque_at(mesh, t, bary) {
-                return Ok(None);
+    let bake_opts = BakeOptions {
+        density: opts.surfel_density(scene)?,
+        light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
+        seed: opts.seed,
+    };
+    let clock = Instant::now();
+    let baked = bake_with_progress(scene, tracer, lights, &bake_opts, &|d, n| progress(SURFELS, d, n))?;
+    times.surfels = clock.elapsed().as_secs_f64();
+    stages.push(Stage {
+        name: "surfels + direct light at surfels",
+        skipped: opts.ao.then(|| "AO mode: surfels carry no radiance".to_string()),
+    });
+    let tree = |cloud: &PointCloud, times: &mut PreTimings| {
+        let clock = Instant::now();
+        progress(TREE, 0, 1);
+        let tree = Tree::build(cloud);
+        progress(TREE, 1, 1);
+        times.tree += clock.elapsed().as_secs_f64();
+        tree
+    };
+    let scheme = opts.scheme.resolve(LANES);
+    let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
+    let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+    let mut cloud = baked.cloud;
+    if environment.is_some() {
+        // The environment's light at the surfels, gathered with the
+        // surfels as occluders only (no radiance of their own): with
+        // no bounce, the receivers see only that occlusion.
+        let dark = PointCloud::new(
+            cloud
+                .surfels()
+                .iter()
+                .map(|s| Surfel {
+                    radiance: Vec3::ZERO,
+                    ..*s
+                })
+                .collect(),
+        )?;
+        if opts.bounces == 0 {
+            cloud = dark;
+        } else {
+            let dark_tree = tree(&dark, times);
+            let clock = Instant::now();
+            // Which directions see the sky, by rays (`microbuffer::open`):
+            // the dark tree only groups the surfels.
+            cloud = gather_sky(
+                &dark,
+                &direct,
+                &baked.albedo,
+                &dark_tree,
+                &gopts,
+                &SkyRays(tracer),
+                &|d, n| progress(SKY, d, n),
+            )?;
+            times.gathers += clock.elapsed().as_secs_f64();
+            // `direct` stays the sun's and the lights' alone: each extra
+            // bounce below gathers the sky again with the surfels' light
+            // (taken as part of the direct light, the sky's first bounce
+            // came in twice: the atrium at `--bounces 2` +8.1 %).
+        }
+    }
+    let mut built = tree(&cloud, times);
+    for _ in 1..opts.bounces.max(1) {
+        let clock = Instant::now();
+        let rays = SkyRays(tracer);
+        cloud = gather_bounce(
+            &cloud,
+            &direct,
+            &baked.albedo,
+            &built,
+            &gopts,
+            Some(&rays),
+            &|d, n| progress(BOUNCE, d, n),
+        )?;
+        times.gathers += clock.elapsed().as_secs_f64();
+        built = tree(&cloud, times);
+    }
+    stages.push(Stage {
+        name: "extra bounces gathered at surfels",
+        skipped: (opts.bounces <= 1).then(|| format!("--bounces {} needs none", opts.bounces)),
+    });
+    Ok((cloud, built))
+}
+
+/// The stages of a render whose surfels and tree were loaded.
+pub(super) fn loaded_stages(opts: &RenderOptions, file: &TreeFile, stages: &mut Vec<Stage>) {
+    if file.cloud().is_empty() {
+        stages.push(Stage {
+            name: "surfels, tree and cuts",
+            skipped: Some("--bounces 0: direct light only".into()),
+        });
+        return;
+    }
+    stages.push(Stage {
+        name: "surfels + direct light at surfels",
+        skipped: Some("loaded with the tree".into()),
+    });
+    stages.push(Stage {
+        name: "extra bounces gathered at surfels",
+        skipped: Some(if opts.bounces <= 1 {
+            format!("--bounces {} needs none", opts.bounces)
+        } else {
+            "baked into the loaded surfels".into()
+        }),
+    });
+}
+
+/// What the surfels' light of a render with `opts` depends on.
+pub fn bake_record(scene: &Scene, opts: &RenderOptions) -> BakeRecord {
+    let environment = environment(scene, opts);
+    let points = needs_points(opts, &environment);
+    let gathered = points && (opts.bounces >= 2 || (environment.is_some() && opts.bounces >= 1));
+    BakeRecord {
+        scene: scene_hash(scene),
+        seed: opts.seed,
+        // The density the surfels were made at (a budget's, over this scene;
+        // an invalid budget is refused by `check_options` first).
+        density: opts.surfel_density(scene).unwrap_or(opts.density),
+        light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
+        bounces: opts.bounces,
+        ao: opts.ao,
+        gathered,
+        max_solid_angle: if gathered { opts.cut.max_solid_angle } else { 0.0 },
+        microbuffer: if gathered { opts.microbuffer as u32 } else { 0 },
+    }
+}
+
+/// Refuses a tree whose record differs from the one this render would bake.
+pub(super) fn check_record(baked: &BakeRecord, render: &BakeRecord) -> Result<(), RenderError> {
+    let pairs: [(&'static str, String, String); 9] = [
+        (
+            "scene (hash of its geometry, materials, lights and environment)",
+            format!("{:016x}", baked.scene),
+            format!("{:016x}", render.scene),
+        ),
+        ("--bounces", baked.bounces.to_string(), render.bounces.to_string()),
+        ("--ao", baked.ao.to_string(), render.ao.to_string()),
+        ("--density", baked.density.to_string(), render.density.to_string()),
+        ("seed", baked.seed.to_string(), render.seed.to_string()),
+        (
+            "light samples per surfel",
+            baked.light_samples.to_string(),
+            render.light_samples.to_string(),
+        ),
+        (
+            "gathers at the surfels (extra bounces, environment)",
+            baked.gathered.to_string(),
+            render.gathered.to_string(),
+        ),
+        (
+            "--max-solid-angle (of the gathers at the surfels)",
+            baked.max_solid_angle.to_string(),
+            render.max_solid_angle.to_string(),
+        ),
+        (
+            "--microbuffer (of the gathers at the surfels)",
+            baked.microbuffer.to_string(),
+            render.microbuffer.to_string(),
+        ),
+    ];
+    // Floats compare by their text, which round-trips: equal text, equal bits.
+    match pairs.into_iter().find(|(_, b, r)| b != r) {
+        Some((setting, baked, render)) => Err(RenderError::TreeMismatch {
+            setting,
+            baked,
+            render,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A hash of everything in `scene` the surfels' light depends on: meshes,
+/// materials, lights, environment (not the names, the camera or the
+/// warnings, so one baked tree serves any view).
+pub fn scene_hash(scene: &Scene) -> u64 {
+    let mut h = Fnv1a::default();
+    let u32s = |h: &mut Fnv1a, v: &[u32]| v.iter().for_each(|x| h.write(&x.to_le_bytes()));
+    let f32s = |h: &mut Fnv1a, v: &[f32]| v.iter().for_each(|x| h.write(&x.to_bits().to_le_bytes()));
+    let vec3s = |h: &mut Fnv1a, v: &[Vec3]| v.iter().for_each(|p| f32s(h, &p.to_array()));
+    u32s(&mut h, &[scene.meshes.len() as u32]);
+    for m in &scene.meshes {
+        u32s(
+            &mut h,
+            &[
+                m.positions.len() as u32,
+                m.triangles.len() as u32,
+                m.material as u32,
+            ],
+        );
+        vec3s(&mut h, &m.positions);
+        m.triangles.iter().for_each(|t| u32s(&mut h, t));
+        match &m.normals {
+            Some(n) => {
+                u32s(&mut h, &[1]);
+                vec3s(&mut h, n);
             }
-            let at = SurfacePoint {
-                triangle: t,
-                uv: bary,
-                width: 2.0 * radius,
-            };
-            let albedo = material.albedo_at(mesh, &at);
-            let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            let scramble = [h as u32, (h >> 32) as u32];
-            let radiance = if albedo.max_element() <= 0.0 {
-                Vec3::ZERO
-            } else if let Site::Pooled { pool, k } = site {
-                // One light sample at each of points spread over the share.
-                let pool = &pools[pool];
-                let spread = opts.light_samples.max(1);
-                let share = pool.share();
-                let mut sum = Vec3::ZERO;
-                for j in 0..spread {
-                    let x = (k as f64 + (j as f64 + 0.5) / spread as f64) * share;
-                    let w = radical_inverse(j, scramble[1]);
-                    let (at, n, _) = pool.point(scene, x, w);
-                    let samples = LightSamples {
-                        count: opts.light_samples.min(1),
-                        first: j,
-                        scramble,
-                        ratio: false,
-                    };
-                    sum += lights.reflected(tracer, at, n, samples, Brdf::lambert(albedo));
-                }
-                sum / spread as f32
-            } else {
-                let samples = LightSamples {
-                    count: opts.light_samples,
-                    first: 0,
-                    scramble,
-                    ratio: false,
-                };
-                lights.reflected(tracer, position, normal, samples, Brdf::lambert(albedo))
-            };
-            if !radiance.is_finite() {
-                return Err(Error::InvalidSurfel {
-                    index: i,
-                    reason: Invalid::NonFinite {
-                        field: "radiance (direct light at the surfel)",
-                    },
-                });
-            }
-            // A finite estimate beyond the range a surfel accepts (a surfel
-            // a hair from a light of the brightest emission) saturates.
-            let surfel = Surfel {
-                position,
-                normal,
-                radius,
-                radiance: radiance.min(Vec3::splat(MAX_RADIANCE)),
-            };
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if d.is_multiple_of(TICK) || d == all.len() {
-                tick(d, all.len());
-            }
-            // Geometry beyond `MAX_COORDINATE` makes no surfel.
-            Ok(surfel.validate(i).is_ok().then_some((surfel, albedo)))
-        })
-        .collect::<Result<_, Error>>()?;
-    let (surfels, albedo): (Vec<Surfel>, Vec<Vec3>) = baked.into_iter().flatten().unzip();
-    Ok(Baked {
-        cloud: PointCloud::new(surfels).expect("baked surfels are validated one by one"),
-        albedo,
-    })
+            None => u32s(&mut h, &[0]),
+        }
+        vec3s(&mut h, &[m.emission.unwrap_or(Vec3::splat(-1.0))]);
+        // Only when present: an untextured scene hashes as it always did.
+        for uvs in &m.uvs {
+            uvs.iter().for_each(|uv| f32s(&mut h, &uv.to_array()));
+        }
+    }
+    u32s(&mut h, &[scene.materials.len() as u32]);
+    for m in &scene.materials {
+        vec3s(&mut h, &[m.albedo]);
+        let g = m.glossy.map_or([-1.0; 4], |g| {
+            [g.specular.x, g.specular.y, g.specular.z, g.roughness]
+        });
+        let b = m.bump.map_or([-1.0; 2], |b| [b.amplitude, b.frequency]);
+        f32s(&mut h, &g);
+        f32s(&mut h, &b);
+        u32s(&mut h, &[m.two_sided as u32]);
+        let maps = [
+            m.albedo_map.as_ref().map(|t| (t, 0, [0.0; 2])),
+            m.alpha
+                .as_ref()
+                .map(|a| (&a.map, 1 + a.channel as u32, [a.factor, a.cutoff])),
+            m.normal_map
+                .as_ref()
+                .map(|n| (&n.map, 5 + n.relief as u32, [n.scale, 0.0])),
+        ];
+        for (map, kind, values) in maps.into_iter().flatten() {
+            let t = &map.transform;
+            u32s(
+                &mut h,
+                &[kind, map.uv_set as u32, map.wrap[0] as u32, map.wrap[1] as u32],
+            );
+            f32s(
+                &mut h,
+                &[t.columns[0].x, t.columns[0].y, t.columns[1].x, t.columns[1].y],
+            );
+            f32s(&mut h, &[t.offset.x, t.offset.y, values[0], values[1]]);
+            h.write(&map.texture.fingerprint().to_le_bytes());
+        }
+    }
+    u32s(&mut h, &[scene.lights.len() as u32]);
+    for l in &scene.lights {
+        let (kind, a, b) = match *l {
+            Light::Point { position, intensity } => (0, position, intensity),
+            Light::Directional {
+                direction,
+                irradiance,
+            } => (1, direction, irradiance),
+        };
+        u32s(&mut h, &[kind]);
+        vec3s(&mut h, &[a, b]);
+    }
+    match &scene.environment {
+        None => u32s(&mut h, &[0]),
+        Some(env) => {
+            let (w, ht, texels) = env.texels();
+            u32s(&mut h, &[1, w as u32, ht as u32]);
+            vec3s(&mut h, texels);
+        }
+    }
+    h.0
+}
+
+/// Bakes the surfels and their tree as a render of `scene` with `opts`
+/// would build them, with the record a render checks them against.
+///
+/// ```
+/// use pbgi::render::{Frame, RenderOptions, bake_tree};
+/// use pbgi::scene::builtin::cornell_box;
+/// use pbgi::tree::TreeFile;
+///
+/// let mut scene = cornell_box();
+/// (scene.camera.width, scene.camera.height) = (8, 8);
+/// let opts = RenderOptions { spp: 1, density: 50.0, ..Default::default() };
+/// let mut bytes = Vec::new();
+/// bake_tree(&scene, &opts)?.save(&mut bytes)?;
+///
+/// let file = TreeFile::load(bytes.as_slice())?;
+/// let loaded = Frame::with_tree(&scene, &opts, file)?.render(&|_, _| {})?;
+/// let built = Frame::prepare(&scene, &opts)?.render(&|_, _| {})?;
+/// assert_eq!(loaded.image, built.image); // bit for bit
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn bake_tree(scene: &Scene, opts: &RenderOptions) -> Result<TreeFile, RenderError> {
+    bake_tree_with_progress(scene, opts, &|_, _, _| {})
+}
+
+/// [`bake_tree`], telling `progress` where it is (for a progress bar).
+pub fn bake_tree_with_progress(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &Progress,
+) -> Result<TreeFile, RenderError> {
+    check_options(scene, opts)?;
+    let (tracer, lights) = tracer_and_lights(scene, progress);
+    let (cloud, tree) = build(
+        scene,
+        opts,
+        &tracer,
+        &lights,
+        &mut Vec::new(),
+        &mut PreTimings::default(),
+        progress,
+    )?;
+    TreeFile::new(cloud, tree, bake_record(scene, opts))
+        .map_err(|e| RenderError::Check(format!("baked tree: {e}")))
 }

@@ -10,7 +10,7 @@ use std::io::{Read, Write};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::baked::bake_record;
+use super::bake::bake_record;
 use super::frame::{Frame, PacketPoint, Timers};
 use super::options::Gathers;
 use super::output::RenderError;

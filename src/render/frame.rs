@@ -12,14 +12,14 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::baked::{
+use super::bake::{
     bake_record, build, check_options, check_record, environment, gather_options, loaded_stages,
     needs_points, tracer_and_lights,
 };
 use super::image::Image;
 use super::light::{Brdf, LightSamples, Lights};
 use super::options::{Crop, Direct, RenderOptions};
-use super::output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
+use super::output::{PreTimings, Progress, RenderError, RenderOutput, Stage, Timings};
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::cache::Cache;
@@ -105,14 +105,14 @@ impl<'s> Frame<'s> {
         Self::prepare_with(scene, opts, None, &|_, _, _| {})
     }
 
-    /// [`prepare`](Self::prepare), telling `report` which stage it is in
+    /// [`prepare`](Self::prepare), telling `progress` which stage it is in
     /// and how far along (for a progress bar over a large scene's `pre.`).
-    pub fn prepare_reporting(
+    pub fn prepare_with_progress(
         scene: &'s Scene,
         opts: &RenderOptions,
-        report: &Report,
+        progress: &Progress,
     ) -> Result<Self, RenderError> {
-        Self::prepare_with(scene, opts, None, report)
+        Self::prepare_with(scene, opts, None, progress)
     }
 
     /// [`prepare`](Self::prepare) with the surfels and tree of `file` (from
@@ -127,7 +127,7 @@ impl<'s> Frame<'s> {
         scene: &'s Scene,
         opts: &RenderOptions,
         file: Option<TreeFile>,
-        report: &Report,
+        progress: &Progress,
     ) -> Result<Self, RenderError> {
         check_options(scene, opts)?;
         let environment = environment(scene, opts);
@@ -136,15 +136,22 @@ impl<'s> Frame<'s> {
         let mut stages = Vec::new();
 
         let t_pre = Instant::now();
-        let (tracer, lights) = tracer_and_lights(scene, report);
+        let (tracer, lights) = tracer_and_lights(scene, progress);
         let mut pre_parts = PreTimings {
             tracer: t_pre.elapsed().as_secs_f64(),
             ..PreTimings::default()
         };
         let (tree, surfels) = match file {
             None => {
-                let (cloud, tree) =
-                    build(scene, opts, &tracer, &lights, &mut stages, &mut pre_parts, report)?;
+                let (cloud, tree) = build(
+                    scene,
+                    opts,
+                    &tracer,
+                    &lights,
+                    &mut stages,
+                    &mut pre_parts,
+                    progress,
+                )?;
                 (tree, cloud.len())
             }
             Some(file) => {

@@ -5,10 +5,11 @@
 //!
 //! Data enters as a [`Scene`](crate::scene::Scene) and [`RenderOptions`];
 //! it leaves as a [`RenderOutput`] (image, Table-1 times, counters, stages).
-//! The files, in data-flow order: `options`; `trace` (ray queries), `light`
-//! (direct light), `bake` (surfels with their direct light), `bounces`
+//! The files, in data-flow order: `options`, `resolve` (the settings a
+//! render takes, flags over the scene file over the defaults); `trace` (ray queries), `light`
+//! (direct light), `surfels` (surfels with their direct light), `bounces`
 //! (extra bounces at the surfels, through [`Gather`](crate::gather::Gather));
-//! `baked` (the surfels and tree a render needs, built or read from a tree
+//! `bake` (the surfels and tree a render needs, built or read from a tree
 //! file, [`bake_tree`]);
 //! `shading` (shading points), `frame` (the frame, tile by tile, each packet
 //! through a [`Gatherer`](crate::gather::Gatherer)), `sparse` (the lattice of
@@ -21,7 +22,6 @@
 //! against).
 
 mod bake;
-mod baked;
 mod bounces;
 mod cached;
 mod camera_samples;
@@ -31,19 +31,20 @@ mod frame;
 mod guides;
 mod image;
 mod light;
-mod near;
+mod near_rays;
 mod options;
 mod output;
 pub mod reference;
+mod resolve;
 mod shading;
 mod share;
 mod sparse;
 mod spherical;
+mod surfels;
 mod tile;
 mod trace;
 
-pub use bake::{BakeOptions, Baked, bake};
-pub use baked::{bake_record, bake_tree, bake_tree_reporting, scene_hash};
+pub use bake::{bake_record, bake_tree, bake_tree_with_progress, scene_hash};
 #[cfg(feature = "denoise")]
 pub use denoise::{DenoiseError, denoise};
 pub(crate) use frame::PacketPoint;
@@ -51,11 +52,13 @@ pub use frame::{Frame, render};
 pub use guides::Guides;
 pub use image::Image;
 pub use light::{ANALYTIC_TRIANGLES, Brdf, LightSamples, Lights};
-pub use near::NearRays;
+pub use near_rays::NearRays;
 pub use options::{
     Component, Crop, CropError, DEFAULT_LIGHT_SAMPLES, DEFAULT_SURFEL_BUDGET, Direct, Gathers, RenderOptions,
 };
-pub use output::{PreTimings, RenderError, RenderOutput, Report, Stage, Timings};
+pub use output::{PreTimings, Progress, RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
+pub use resolve::{Flags, Resolved, UNLIMITED_BOUNCES, file_bounces, file_spp};
 pub(crate) use shading::shading_point;
+pub use surfels::{BakeOptions, Baked, bake};
 pub use trace::{Hit, Tracer};

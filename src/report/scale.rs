@@ -91,7 +91,7 @@ pub fn scale_row(
     opts: &RenderOptions,
     budget: u32,
     read: f64,
-    report: &crate::render::Report,
+    progress: &crate::render::Progress,
 ) -> Result<ScaleRow, RenderError> {
     let measured = reset_peak();
     let clock = Instant::now();
@@ -99,7 +99,7 @@ pub fn scale_row(
         surfel_budget: Some(budget),
         ..*opts
     };
-    let frame = Frame::prepare_reporting(scene, &opts, report)?;
+    let frame = Frame::prepare_with_progress(scene, &opts, progress)?;
     let tree_bytes_per_surfel = frame.tree().bytes_per_surfel();
     let out = frame.render(&|_, _| {})?;
     let total = read + clock.elapsed().as_secs_f64();

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use pbgi::gather::MAX_THREADS;
-use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Direct, Gathers, ReferenceOptions, RenderOptions};
+use pbgi::render::{Crop, Direct, Gathers, ReferenceOptions, RenderOptions};
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
 use crate::view::ViewArgs;
@@ -258,21 +258,6 @@ impl Settings {
             surfel_budget: self.surfels,
             ..RenderOptions::default()
         })
-    }
-
-    /// `opts` for scene `name`: with neither `--density` nor `--surfels`, a
-    /// file gets the default budget ([`DEFAULT_SURFEL_BUDGET`]) and the
-    /// named scenes (built in, fetched) their density 2000, so their images
-    /// stay as they were.
-    pub fn for_scene(&self, name: &str, opts: RenderOptions) -> RenderOptions {
-        let unset = self.density.is_none() && self.surfels.is_none();
-        RenderOptions {
-            surfel_budget: match opts.surfel_budget {
-                None if unset && !pbgi::scene::catalogue::is_named(name) => Some(DEFAULT_SURFEL_BUDGET),
-                b => b,
-            },
-            ..opts
-        }
     }
 }
 

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use pbgi::TreeFile;
-use pbgi::render::bake_tree_reporting;
+use pbgi::render::bake_tree_with_progress;
 
 use crate::args::{BakeArgs, Res, bake_options};
-use crate::overrides::Won;
+use crate::overrides::{print_notes, resolve};
 use crate::{StageBars, load_lit_scene, thread_pool};
 
 /// A tree file, read and checked, with the seconds that took.
@@ -30,10 +30,10 @@ pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
 
 pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let scene = load_lit_scene(&a.scene, &a.environment)?;
-    let mut opts = a.settings.for_scene(&a.scene, bake_options(a)?);
-    // The file's max_depth as `pbgi render` takes it: the tree serves that render.
-    let won = Won::choose(&scene, None, a.settings.bounces.map(|b| b as i32), true);
-    opts.bounces = won.bounces.map_or(opts.bounces, |b| b as u32);
+    // The file's max_depth as `pbgi render` takes it: the tree serves that
+    // render (its camera samples do not matter to the bake).
+    let resolved = resolve(&scene, &a.scene, bake_options(a)?, &a.settings, None);
+    let opts = resolved.options;
     let out_path = a
         .output
         .clone()
@@ -41,7 +41,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let pool = thread_pool(a.threads)?;
     let t0 = Instant::now();
     let stages = StageBars::new(&scene.name);
-    let file = pool.install(|| bake_tree_reporting(&scene, &opts, &|s, d, n| stages.report(s, d, n)));
+    let file = pool.install(|| bake_tree_with_progress(&scene, &opts, &|s, d, n| stages.report(s, d, n)));
     stages.finish();
     let file = file?;
     let seconds = t0.elapsed().as_secs_f64();
@@ -65,7 +65,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
             String::new()
         }
     );
-    won.print();
+    print_notes(&resolved.bounces_note.iter().cloned().collect::<Vec<_>>());
     println!(
         "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
         file.cloud().len(),

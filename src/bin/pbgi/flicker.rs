@@ -32,7 +32,7 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
     crate::overrides::set_view(&mut scene, &a.view)?;
     let cameras = crate::path::cameras(path_file, &scene)?;
     let pool = thread_pool(a.threads)?;
-    let opts = a.settings.for_scene(&a.scene, a.settings.options(1)?);
+    let opts = crate::overrides::resolve(&scene, &a.scene, a.settings.options(1)?, &a.settings, None).options;
     let framed = |k: usize| Scene {
         camera: cameras[k],
         ..scene.clone()

@@ -24,10 +24,11 @@ use args::{
     parse_choices,
 };
 use clap::Parser;
-use overrides::{Won, set_view};
+use overrides::{print_notes, set_view};
 use pbgi::SchemeChoice;
 use pbgi::render::{
-    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, render_reference,
+    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, file_bounces,
+    file_spp, render_reference,
 };
 use pbgi::report::{BenchOptions, BenchReceivers, BenchRow, bench};
 use pbgi::scene::resolve;
@@ -125,12 +126,8 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     let mut scene = load_lit_scene(&a.scene, &a.environment)?;
     let read = clock.elapsed().as_secs_f64();
     set_view(&mut scene, &a.view)?;
-    let mut opts = a.settings.for_scene(&a.scene, options(a)?);
-    let won = Won::choose(&scene, a.spp, a.settings.bounces.map(|b| b as i32), true);
-    (opts.spp, opts.bounces) = (
-        won.spp.unwrap_or(opts.spp),
-        won.bounces.map_or(opts.bounces, |b| b as u32),
-    );
+    let resolved = overrides::resolve(&scene, &a.scene, options(a)?, &a.settings, a.spp);
+    let opts = resolved.options;
     let out_path = match &a.camera_path {
         Some(_) => path::pattern(a.output.as_deref(), &scene.name)?,
         None => {
@@ -160,7 +157,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
                 e => Box::<dyn std::error::Error + Send + Sync>::from(e),
             })
         }
-        None => Ok(Frame::prepare_reporting(&scene, &opts, &|s, d, n| {
+        None => Ok(Frame::prepare_with_progress(&scene, &opts, &|s, d, n| {
             stages.report(s, d, n)
         })?),
     });
@@ -187,7 +184,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         c.close(&frame)?;
     }
     print_summary(&scene, &opts, &out, pool.current_num_threads());
-    won.print();
+    print_notes(&resolved.notes());
     println!("scene read in {read:.3} s (before the render's total)");
     if let Some((path, seconds)) = from {
         println!(
@@ -233,8 +230,10 @@ fn cmd_scenes() -> Res<()> {
 fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
     let mut scene = load_scene(&a.scene)?;
     set_view(&mut scene, &a.view)?;
-    let won = Won::choose(&scene, a.spp, a.bounces, false);
-    let (spp, bounces) = (won.spp.unwrap_or(256), won.bounces.unwrap_or(1));
+    // The path tracer's own: an unlimited max_depth stays unlimited.
+    let (spp, spp_note) = file_spp(scene.file_settings, a.spp);
+    let (bounces, bounces_note) = file_bounces(scene.file_settings, a.bounces, false);
+    let (spp, bounces) = (spp.unwrap_or(256), bounces.unwrap_or(1));
     let out_path = a
         .output
         .clone()
@@ -263,7 +262,7 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
         out.seconds,
         pool.current_num_threads()
     );
-    won.print();
+    print_notes(&[spp_note, bounces_note].into_iter().flatten().collect::<Vec<_>>());
     println!("wrote {}", out_path.display());
     Ok(())
 }
@@ -510,7 +509,7 @@ fn cmd_bench(a: &BenchArgs) -> Res<()> {
     for name in &scenes {
         let scene = load_scene(name)?;
         let opts = BenchOptions {
-            render: a.settings.for_scene(name, opts.render),
+            render: overrides::resolve(&scene, name, opts.render, &a.settings, Some(a.spp)).options,
             ..opts.clone()
         };
         let bar = progress_bar("passes", format!("bench {}", scene.name));

@@ -52,7 +52,7 @@ pub(crate) fn tick(bar: &ProgressBar, done: usize, total: usize) {
     }
 }
 
-/// A bar per stage of a render's `pre.` ([`pbgi::render::Report`]), each
+/// A bar per stage of a render's `pre.` ([`pbgi::render::Progress`]), each
 /// replaced by the next stage's as it begins.
 pub(crate) struct StageBars {
     scene: String,

@@ -53,8 +53,11 @@ fn replot(a: &ReportArgs) -> Res<()> {
 /// The sweep `a` asks for: the default curves, or one per combination of
 /// the lists given (`--full` fills those not given with the old sweep's),
 /// for a scene with or without area lights (`emitters`).
-fn sweep_options(a: &ReportArgs, emitters: bool) -> Res<SweepOptions> {
-    let base = a.settings.for_scene(&a.scene, a.settings.options(1)?);
+fn sweep_options(a: &ReportArgs, scene: &pbgi::scene::Scene) -> Res<SweepOptions> {
+    let emitters = scene.has_emitters();
+    // The render `pbgi render` would make of it (the file's max_depth
+    // included); the sweep sets the camera samples.
+    let base = crate::overrides::resolve(scene, &a.scene, a.settings.options(1)?, &a.settings, None).options;
     let mut grid = if a.full {
         Grid::full(&base)
     } else {
@@ -171,7 +174,7 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     let targets = targets(a)?;
     let mut scene = load_scene(&a.scene)?;
     crate::overrides::set_view(&mut scene, &a.view)?;
-    let sweep = sweep_options(a, scene.has_emitters())?;
+    let sweep = sweep_options(a, &scene)?;
     let denoised = denoised_lists(a)?;
     let pool = thread_pool(a.threads)?;
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;

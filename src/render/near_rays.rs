@@ -14,7 +14,7 @@ use crate::rng::mix;
 use crate::scene::{Scene, SurfacePoint};
 
 /// The scene along a receiver's short rays, shaded as its surfels are
-/// (`bake`): the near field of [`Gather::with_near_field`](crate::gather::Gather::with_near_field)
+/// (`surfels`): the near field of [`Gather::with_near_field`](crate::gather::Gather::with_near_field)
 /// for a scene and its ray tracer, which the renderer uses.
 #[derive(Clone, Copy)]
 pub struct NearRays<'a> {
@@ -83,7 +83,7 @@ impl NearField for NearRays<'_> {
         let l = self
             .lights
             .reflected(self.tracer, q, ng, samples, Brdf::lambert(albedo));
-        // Saturates as the surfels do (`bake`); a non-finite value is kept,
+        // Saturates as the surfels do (`surfels`); a non-finite value is kept,
         // for the gather's own report to name (`min` would hide a NaN).
         let max = Vec3::splat(MAX_RADIANCE);
         Some(Vec3::select(l.cmpgt(max), max, l))
