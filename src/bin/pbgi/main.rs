@@ -391,7 +391,7 @@ pub(crate) fn print_summary(
 ) {
     let c = &scene.camera;
     println!(
-        "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} light sample(s) per camera sample, {}, {} bounce(s){}",
+        "pbgi render: {} ({} triangles), {}{}×{}, {} spp, {} light sample(s) per camera sample ({}), {}, {} bounce(s){}",
         scene.name,
         scene.triangle_count(),
         opts.crop.map(|w| format!("crop {w} of ")).unwrap_or_default(),
@@ -399,6 +399,7 @@ pub(crate) fn print_summary(
         c.height,
         opts.spp,
         opts.light_samples(),
+        opts.direct,
         match opts.gathers {
             Gathers::All => "a gather per camera sample".to_string(),
             g => format!("gathers {g}"),
