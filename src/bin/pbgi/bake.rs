@@ -65,7 +65,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
             String::new()
         }
     );
-    print_notes(&resolved.bounces_note.iter().cloned().collect::<Vec<_>>());
+    print_notes(&resolved.bounces_note);
     println!(
         "{} surfels, {} nodes, depth {}, {:.1} MB, in {seconds:.3} s on {} thread(s)",
         file.cloud().len(),

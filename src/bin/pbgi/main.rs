@@ -262,7 +262,7 @@ fn cmd_reference(a: &ReferenceArgs) -> Res<()> {
         out.seconds,
         pool.current_num_threads()
     );
-    print_notes(&[spp_note, bounces_note].into_iter().flatten().collect::<Vec<_>>());
+    print_notes(spp_note.iter().chain(&bounces_note));
     println!("wrote {}", out_path.display());
     Ok(())
 }

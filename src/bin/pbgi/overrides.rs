@@ -45,7 +45,8 @@ pub fn resolve(scene: &Scene, arg: &str, base: RenderOptions, s: &Settings, spp:
 }
 
 /// `settings: …`, where the scene file asked for something.
-pub fn print_notes(notes: &[String]) {
+pub fn print_notes<'a>(notes: impl IntoIterator<Item = &'a String>) {
+    let notes: Vec<&str> = notes.into_iter().map(String::as_str).collect();
     if !notes.is_empty() {
         println!("settings: {}", notes.join("; "));
     }

@@ -323,19 +323,19 @@ impl Lights {
             }
             sum += area_sum / samples as f32;
             if closed != 0 {
-                let e = self.unshadowed(origin, n, closed);
                 // No sample met the unshadowed light (each fell below the
                 // horizon, or on a back): one point on what lies above it
-                // says how much of it is shadowed.
+                // says how much of it is shadowed (none when nothing does).
                 let share = if unshadowed > 0.0 {
                     reached / unshadowed
-                } else if e.max_element() > 0.0 {
+                } else {
                     let (u, w) = sobol2(first, scramble);
                     self.lit_above_horizon(tracer, origin, n, closed, u, w)
-                } else {
-                    0.0
                 };
-                sum += brdf.diffuse * e * share;
+                // A receiver in full shadow skips the closed form.
+                if share > 0.0 {
+                    sum += brdf.diffuse * self.unshadowed(origin, n, closed) * share;
+                }
             }
         }
         for light in &self.others {
