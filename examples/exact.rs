@@ -3,7 +3,7 @@
 //! Ω × N × surfel density, with the time per receiver on one thread.
 //!
 //! ```text
-//! cargo run --release --no-default-features --example exact -- \
+//! cargo run --release --no-default-features --features lab --example exact -- \
 //!     [--scenes light,bounce,open,blocker,window,sunroom,shell,thin-shell] [--omega 0.1,0.05,…] [--n 8,12,…]
 //!     [--density 2,4,8] [--what irr,occ,glossy] [--scalar] [--grid]
 //!     [--offset 2e-5] [--min-ms 30] [--dump] [--class mid|edge|corner|window]

@@ -4,7 +4,7 @@
 //! of the hemisphere anywhere in the room takes a third of it.
 //!
 //! ```text
-//! cargo run --release --no-default-features --example sky_coverage -- \
+//! cargo run --release --no-default-features --features lab --example sky_coverage -- \
 //!     [--scene window] [--k 4] [--omega 0.15] [--n 12,14,24,48] [--receiver 1] [--rows 8]
 //! ```
 //!

@@ -110,10 +110,12 @@
 
 // Modules in data-flow order: the SIMD vocabulary and dispatch, the kernel
 // layer's data (errors, surfels, tree), cuts, the microbuffer, the gather in
-// one call; inputs for
-// tests and benchmarks (random numbers, synthetic clouds, the closed-form
-// references); then, behind the `render` feature, scenes, the renderer and
-// the report.
+// one call, the world-space cache; random numbers (the renderer's sampling);
+// behind the `render` feature, scenes and the renderer. Last the lab, for the
+// tool, tests, benchmarks and examples alone (feature `lab`, which `cli`
+// turns on): synthetic clouds, the closed-form references and the report.
+// The lab is hidden from the API docs; `cargo doc` with
+// `RUSTDOCFLAGS="-Z unstable-options --document-hidden-items"` shows it.
 pub mod simd;
 
 pub mod error;
@@ -131,10 +133,11 @@ pub mod gather;
 
 pub mod cache;
 
+#[cfg(feature = "lab")]
+#[doc(hidden)]
 pub mod rng;
-pub mod synthetic;
-
-pub mod exact;
+#[cfg(all(not(feature = "lab"), any(test, feature = "render")))]
+mod rng;
 
 #[cfg(feature = "render")]
 pub mod scene;
@@ -142,7 +145,16 @@ pub mod scene;
 #[cfg(feature = "render")]
 pub mod render;
 
-#[cfg(feature = "render")]
+#[cfg(any(test, feature = "lab"))]
+#[doc(hidden)]
+pub mod synthetic;
+
+#[cfg(feature = "lab")]
+#[doc(hidden)]
+pub mod exact;
+
+#[cfg(feature = "lab")]
+#[doc(hidden)]
 pub mod report;
 
 pub use cut::{

@@ -1,8 +1,6 @@
 //! The one random-number generator of the crate: SplitMix64, so sampling
 //! depends on the seed alone, not on a crate's version.
 
-use glam::Vec3;
-
 /// SplitMix64's increment (the golden ratio in 64 bits).
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
@@ -39,11 +37,12 @@ impl Rng {
     }
 
     /// Uniform unit vector.
-    pub fn unit_vector(&mut self) -> Vec3 {
+    #[cfg(any(test, feature = "lab"))]
+    pub fn unit_vector(&mut self) -> glam::Vec3 {
         let z = 2.0 * self.f32() - 1.0;
         let phi = std::f32::consts::TAU * self.f32();
         let s = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(s * phi.cos(), s * phi.sin(), z).normalize()
+        glam::Vec3::new(s * phi.cos(), s * phi.sin(), z).normalize()
     }
 }
 
@@ -53,8 +52,6 @@ impl Rng {
 /// pixel's over its camera samples, cover a light evenly. `scramble` XORs
 /// the digits (random digit scrambling, which keeps the stratification).
 /// Both coordinates in `[0, 1)`.
-// The renderer's samplers: unused without it.
-#[cfg_attr(not(feature = "render"), allow(dead_code))]
 pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
     let (mut x, mut y, mut v, mut bits) = (0u32, 0u32, 1u32 << 31, i);
     let mut k = 0;
@@ -76,8 +73,6 @@ pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
 /// every stratum holds one sample (a √n grid rounded up left the last row
 /// short: at 2 spp both samples fell in the pixel's top half, at 32 the
 /// bottom sixth got a third of its share).
-// The renderer's samplers: unused without it.
-#[cfg_attr(not(feature = "render"), allow(dead_code))]
 pub(crate) fn strata(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let rows = (1..=n.isqrt()).rev().find(|&r| n.is_multiple_of(r)).unwrap_or(1);
@@ -87,8 +82,7 @@ pub(crate) fn strata(n: u32) -> (u32, u32) {
 /// Camera sample `s` of `spp` in pixel `(x, y)`: a point jittered by `rng`
 /// within its stratum ([`strata`]), on the film. The renderer and the path
 /// tracer sample pixels alike.
-// The renderer's samplers: unused without it.
-#[cfg_attr(not(feature = "render"), allow(dead_code))]
+#[cfg(feature = "render")]
 pub(crate) fn film_point(x: u32, y: u32, s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
     let (across, down) = strata(spp);
     let fx = x as f32 + ((s % across) as f32 + rng.f32()) / across as f32;

@@ -286,7 +286,9 @@ fn the_camera_options_move_the_camera() {
 #[test]
 fn each_class_of_error_has_its_exit_status() {
     let dir = scratch("exit");
-    let missing_dir = dir.join("no-such-folder").join("out.png");
+    // A folder is made where missing, but not under a file.
+    std::fs::write(dir.join("a-file"), b"").unwrap();
+    let missing_dir = dir.join("a-file").join("out.png");
     let cases: [(&[&str], i32); 8] = [
         (&["render", "--no-such-option"], 2),
         (&["render", "--spp", "0", "--resolution", "8x8"], 2),

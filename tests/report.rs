@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 use crate::common;
 use pbgi::render::{ReferenceOptions, RenderOptions, render_reference};
 use pbgi::report::{
-    ErrorPoint, Method, PATH_TRACER, Reach, ReportError, SweepOptions, default_curves, equal_error,
-    equal_error_markdown, error_sweep, external_points, from_csv, time_for, to_csv,
+    ErrorPoint, Method, OIDN_SUFFIX, PATH_TRACER, Reach, ReportError, SweepOptions, default_curves,
+    equal_error, equal_error_markdown, error_sweep, external_points, from_csv, summary_header, summary_row,
+    time_for, to_csv,
 };
 use pbgi::scene::builtin::cornell_box;
 
@@ -184,6 +185,39 @@ fn denoised_path_tracing_gets_a_ratio_of_its_own() {
     );
     let md = equal_error_markdown(&points[..4], &[0.02]);
     assert!(!md.contains("denoised"), "{md}");
+}
+
+/// The README's row: the plain curve's error and time at the default spp,
+/// then per error the soonest plain curve, the soonest one through OIDN and
+/// the soonest denoised path tracing, kept apart.
+#[test]
+fn the_summary_row_keeps_pbgi_its_denoised_curves_and_mitsuba_apart() {
+    use Method::{Denoised, PathTracer, PointBased};
+    let points = [
+        point(PointBased, "defaults", 1, 2.0, 0.06),
+        point(PointBased, "defaults", 4, 4.0, 0.02),
+        // Through OIDN: 4 % at 1 spp, so 4 % sooner than the plain curve.
+        point(PointBased, &format!("defaults{OIDN_SUFFIX}"), 1, 2.5, 0.04),
+        point(PointBased, &format!("defaults{OIDN_SUFFIX}"), 4, 4.5, 0.03),
+        point(PathTracer, PATH_TRACER, 16, 1.0, 0.1),
+        point(Denoised, "Mitsuba 3 + OIDN", 4, 0.5, 0.04),
+        point(Denoised, "Mitsuba 3 + OIDN", 16, 2.0, 0.03),
+    ];
+    let header = summary_header(4, &[0.04, 0.02]);
+    assert!(header.starts_with("| scene | pbgi at 4 spp: error, time | seconds to 4 / 2 %: pbgi |"));
+    let row = summary_row("box", &points, &[0.04, 0.02], 4);
+    // Plain: 4 % between 2 s (6 %) and 4 s (2 %); 2 % at its last point.
+    let f = (0.04f64 / 0.06).ln() / (0.02f64 / 0.06).ln();
+    let at_4 = 2.0 * 2f64.powf(f);
+    assert_eq!(
+        row,
+        format!("| box | 2.00 %, 4.00 s | {at_4:.1} / 4.0 s | 2.5 / — s | 0.50 / — s |"),
+    );
+    // Without denoised curves, their columns say so.
+    let row = summary_row("box", &points[..2], &[0.04], 4);
+    assert_eq!(row, format!("| box | 2.00 %, 4.00 s | {at_4:.1} s | n/a | n/a |"));
+    // A default spp the sweep lacks is not made up.
+    assert!(summary_row("box", &points[..2], &[0.04], 8).starts_with("| box | n/a |"));
 }
 
 /// The list `scripts/denoised.py` writes reads back; a bad line is an error

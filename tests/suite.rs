@@ -5,6 +5,13 @@
 //! named after it:
 //! `cargo test --profile quick --test suite -- render_gathers::` runs `tests/render_gathers.rs`.
 
+// The tests use the lab (synthetic clouds, exact references, the report)
+// and the CLI: a build without them fails here rather than running none.
+#[cfg(not(feature = "cli"))]
+compile_error!(
+    "the tests need the `cli` feature (the default): run `cargo test` without --no-default-features"
+);
+
 mod common;
 
 mod bad_input;
@@ -21,6 +28,7 @@ mod gltf;
 mod guides;
 mod hiding;
 mod inputs;
+mod readme;
 mod reference;
 mod render;
 mod render_gathers;

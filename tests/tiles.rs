@@ -142,3 +142,122 @@ fn bad_crops_and_trees_are_errors_naming_them() {
         "junk.pbgi: not a pbgi tree file",
     );
 }
+
+/// A farm's shot: one bake, then each frame's tiles of a 3 × 2 grid as
+/// separate `pbgi render --frames K --tiles 3,2 --tile T` processes, joined
+/// by `pbgi stitch`: every frame's file is byte for byte the file of one
+/// `pbgi render --camera-path` of the whole shot.
+#[test]
+fn a_shots_tiles_from_one_bake_stitch_into_the_frames_of_one_render() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("tiles-shot");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = small_scene(&dir);
+    let scene = scene.to_str().unwrap();
+    let path = dir.join("shot.json");
+    std::fs::write(
+        &path,
+        r#"{"frames": [{"origin": [0, 0, 3.9], "target": [0, 0, 2.9]},
+                       {"origin": [0.05, 0.02, 3.6], "target": [0.02, 0, 2.9]}]}"#,
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let tree = dir.join("shot.pbgi");
+    let tree = tree.to_str().unwrap();
+    let settings = ["--density", "300", "--spp", "2"];
+    pbgi(&[&["bake", scene, "-o", tree, "--density", "300"][..]].concat());
+    let single = dir.join("single/frame-{}.exr");
+    let args = [
+        "render",
+        scene,
+        "--camera-path",
+        path,
+        "-o",
+        single.to_str().unwrap(),
+    ];
+    pbgi(&[&args[..], &settings[..]].concat());
+    let tiles = dir.join("tiles/frame-{}-tile-{tile}.exr");
+    for frame in ["0", "1"] {
+        for tile in 0..6 {
+            let out = tiles.to_str().unwrap().replace("{tile}", &tile.to_string());
+            let tile = tile.to_string();
+            let args = [
+                "render",
+                scene,
+                "--tree",
+                tree,
+                "--camera-path",
+                path,
+                "--frames",
+                frame,
+                "--tiles",
+                "3,2",
+                "--tile",
+                &tile,
+                "-o",
+                &out,
+            ];
+            pbgi(&[&args[..], &settings[..]].concat());
+        }
+    }
+    let frames = dir.join("frames/frame-{}.exr");
+    let args = [
+        "stitch",
+        tiles.to_str().unwrap(),
+        "--tiles",
+        "3,2",
+        "--frames",
+        "0-1",
+        "-o",
+    ];
+    let printed = pbgi(&[&args[..], &[frames.to_str().unwrap()]].concat());
+    assert_eq!(printed.matches("(30×22, 6 tiles").count(), 2, "{printed}");
+    for k in ["0000", "0001"] {
+        let name = |p: &PathBuf| PathBuf::from(p.to_str().unwrap().replace("{}", k));
+        let (a, b) = (
+            std::fs::read(name(&frames)).unwrap(),
+            std::fs::read(name(&single)).unwrap(),
+        );
+        assert!(a == b, "frame {k}: the stitched file differs from one render's");
+    }
+    // The last tile of frame 1 is the bottom right one: 10 × 11 pixels.
+    let last = tiles
+        .to_str()
+        .unwrap()
+        .replace("{}", "0001")
+        .replace("{tile}", "5");
+    assert_eq!(read_exr(Path::new(&last)).0, 10);
+
+    // A frame past the path, a tile past the grid, and a missing tile are
+    // errors naming them.
+    let fails = |args: &[&str], want: &str| {
+        let out = common::pbgi_command().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(want),
+            "pbgi {args:?}: {err}"
+        );
+    };
+    let o = dir.join("x-{}.exr");
+    let o = o.to_str().unwrap();
+    fails(
+        &["render", scene, "--camera-path", path, "--frames", "2", "-o", o],
+        "--frames 2: the camera path has frames 0 to 1",
+    );
+    fails(
+        &["render", scene, "--tiles", "3,2", "--tile", "6", "-o", "x.exr"],
+        "tile 6: a 3,2 grid has tiles 0 to 5",
+    );
+    let missing = dir.join("none-{tile}.exr");
+    fails(
+        &[
+            "stitch",
+            missing.to_str().unwrap(),
+            "--tiles",
+            "2,1",
+            "-o",
+            "x.exr",
+        ],
+        "none-0.exr",
+    );
+}

@@ -21,7 +21,7 @@
 //! through exactly one jamb or the outer aperture: each part is its
 //! polygon clipped to the cone of the inner aperture, and the parts add up.
 //!
-//! Gathering ([`gather`]) uses only the library's public API: the same
+//! Gathering ([`gather()`]) uses only the library's public API: the same
 //! traversal and microbuffer pipelines a renderer runs.
 //!
 //! In data-flow order: [`room`](ExactScene::room) builds a scene, `answer` holds

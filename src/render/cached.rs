@@ -264,7 +264,9 @@ impl Frame<'_> {
     }
 
     /// The cache's records' receivers in the packets a render from scratch
-    /// gathers them in ([`Cache::packets`]); none without a cache.
+    /// gathers them in ([`Cache::packets`]); none without a cache. For the
+    /// report's benchmark.
+    #[cfg(feature = "lab")]
     pub(crate) fn cache_packets(&self) -> Vec<Vec<(Vec3, Vec3)>> {
         self.held_cache().as_ref().map_or_else(Vec::new, Cache::packets)
     }

@@ -23,7 +23,7 @@ use super::output::{PreTimings, Progress, RenderError, RenderOutput, Stage, Timi
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::cache::Cache;
-use crate::cut::{Receiver, Scheme, SchemeChoice, TraversalStats};
+use crate::cut::{Scheme, SchemeChoice, TraversalStats};
 use crate::environment::Environment;
 use crate::error::Error;
 use crate::gather::{Gather, Gatherer};
@@ -370,15 +370,17 @@ impl<'s> Frame<'s> {
     }
 
     /// The receivers of `points`.
-    pub(crate) fn receivers(points: &[PacketPoint]) -> Result<Vec<Receiver>, Error> {
+    #[cfg(feature = "lab")]
+    pub(crate) fn receivers(points: &[PacketPoint]) -> Result<Vec<crate::cut::Receiver>, Error> {
         points
             .iter()
-            .map(|pp| Receiver::new(pp.point.position, pp.point.receiver_normal))
+            .map(|pp| crate::cut::Receiver::new(pp.point.position, pp.point.receiver_normal))
             .collect()
     }
 
     /// Splats each point's cut (the packet `gatherer` cut last) into its
     /// microbuffer and convolves: the indirect light (or `1 − AO`) at each point.
+    #[cfg(feature = "lab")]
     pub(crate) fn shade(&self, points: &[&PacketPoint], gatherer: &mut Gatherer) -> Vec<Vec3> {
         self.gathered(points, gatherer)
             .into_iter()

@@ -40,6 +40,7 @@ mod shading;
 mod share;
 mod sparse;
 mod spherical;
+mod stitch;
 mod surfels;
 mod tile;
 mod trace;
@@ -47,6 +48,7 @@ mod trace;
 pub use bake::{bake_record, bake_tree, bake_tree_with_progress, scene_hash};
 #[cfg(feature = "denoise")]
 pub use denoise::{DenoiseError, denoise};
+#[cfg(feature = "lab")]
 pub(crate) use frame::PacketPoint;
 pub use frame::{Frame, render};
 pub use guides::Guides;
@@ -59,6 +61,8 @@ pub use options::{
 pub use output::{PreTimings, Progress, RenderError, RenderOutput, Stage, Timings};
 pub use reference::{ReferenceOptions, ReferenceOutput, render_reference};
 pub use resolve::{Flags, Resolved, UNLIMITED_BOUNCES, file_bounces, file_spp};
+#[cfg(feature = "lab")]
 pub(crate) use shading::shading_point;
+pub use stitch::{TileError, Tiles};
 pub use surfels::{BakeOptions, Baked, bake};
 pub use trace::{Hit, Tracer};

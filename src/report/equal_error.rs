@@ -220,7 +220,7 @@ fn over(a: Reach, b: Reach) -> Reach {
 /// Keeps the sooner of `best` and `(label, r)`: measured beats
 /// extrapolated, as the model flatters a curve beyond its ends (fixed costs
 /// below).
-fn keep_soonest(best: &mut Option<(String, Reach)>, label: &str, r: Reach) {
+pub(super) fn keep_soonest(best: &mut Option<(String, Reach)>, label: &str, r: Reach) {
     let key = |r: &Reach| (r.extrapolated, r.seconds);
     if best.as_ref().is_none_or(|b| key(&r) < key(&b.1)) {
         *best = Some((label.to_string(), r));

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::equal_error::{Reach, equal_error, series, time_above_floor};
+use super::equal_error::{Reach, Series, equal_error, keep_soonest, series, time_above_floor};
 use super::sweep::{ErrorPoint, Method};
 
 /// Seconds to three significant digits.
@@ -100,6 +100,77 @@ pub fn equal_error_markdown(points: &[ErrorPoint], errors: &[f64]) -> String {
          stopped falling above it)."
     );
     s
+}
+
+/// The suffix of a point-based curve's label whose images went through
+/// Intel OIDN (`pbgi report --denoise`).
+pub const OIDN_SUFFIX: &str = " + OIDN";
+
+/// The README's table's header (`docs/expect.md`), for [`summary_row`]'s
+/// rows at `errors`.
+pub fn summary_header(spp: u32, errors: &[f64]) -> String {
+    let at = errors
+        .iter()
+        .map(|&e| percent(e).trim_end_matches(" %").to_string());
+    format!(
+        "| scene | pbgi at {spp} spp: error, time | seconds to {} %: pbgi | pbgi + OIDN | \
+         Mitsuba 3 + OIDN |\n| --- | --- | --- | --- | --- |",
+        at.collect::<Vec<_>>().join(" / ")
+    )
+}
+
+/// One row of the README's table: `title`, the first point-based curve's
+/// error and wall time at `spp`, then the seconds to each of `errors` of
+/// the soonest point-based curve, the soonest one through OIDN (labels
+/// ending in [`OIDN_SUFFIX`]) and the soonest denoised path tracing (`~`
+/// extrapolated, `—` not reached, `n/a` not in the sweep).
+pub fn summary_row(title: &str, points: &[ErrorPoint], errors: &[f64], spp: u32) -> String {
+    let all = series(points);
+    let first = all
+        .iter()
+        .find(|c| c.method == Method::PointBased && !c.label.ends_with(OIDN_SUFFIX));
+    let at_spp = first
+        .and_then(|c| c.points.iter().find(|p| p.0 == spp))
+        .map_or("n/a".to_string(), |&(_, t, e)| {
+            format!("{}, {}", percent_2(e), seconds(t))
+        });
+    let column = |keep: &dyn Fn(&Series) -> bool| {
+        let curves: Vec<_> = all.iter().filter(|c| keep(c)).collect();
+        if curves.is_empty() {
+            return "n/a".to_string();
+        }
+        let cells: Vec<String> = errors
+            .iter()
+            .map(|&e| {
+                let mut best = None;
+                for c in &curves {
+                    if let Some(r) = time_above_floor(&c.time_error(), c.floor, e) {
+                        keep_soonest(&mut best, &c.label, r);
+                    }
+                }
+                best.map_or("—".to_string(), |(_, r)| approx(&r, short_seconds(r.seconds)))
+            })
+            .collect();
+        format!("{} s", cells.join(" / "))
+    };
+    let pbgi = column(&|c| c.method == Method::PointBased && !c.label.ends_with(OIDN_SUFFIX));
+    let pbgi_oidn = column(&|c| c.method == Method::PointBased && c.label.ends_with(OIDN_SUFFIX));
+    let denoised = column(&|c| c.method == Method::Denoised);
+    format!("| {title} | {at_spp} | {pbgi} | {pbgi_oidn} | {denoised} |")
+}
+
+/// A relative error in percent to two decimals (`2.91 %`).
+fn percent_2(e: f64) -> String {
+    format!("{:.2} %", e * 100.0)
+}
+
+/// Seconds to two significant digits, without the unit (`0.56`, `2.7`, `14`).
+fn short_seconds(x: f64) -> String {
+    match x {
+        x if x >= 10.0 => format!("{x:.0}"),
+        x if x >= 1.0 => format!("{x:.1}"),
+        x => format!("{x:.2}"),
+    }
 }
 
 /// The whole report: a header (`context`: the reference, the settings, the

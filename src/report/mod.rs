@@ -36,7 +36,7 @@ pub use equal_error::{
 };
 pub use error::ReportError;
 pub use flicker::{Flicker, flicker};
-pub use markdown::{equal_error_markdown, to_markdown};
+pub use markdown::{OIDN_SUFFIX, equal_error_markdown, summary_header, summary_row, to_markdown};
 pub use scale::{ScaleRow, copies, scale_csv, scale_markdown, scale_row};
 pub use sweep::{
     Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, DEFAULT_TARGETS, ErrorPoint, Grid, Method, PATH_TRACER,

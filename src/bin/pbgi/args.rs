@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use pbgi::gather::MAX_THREADS;
-use pbgi::render::{Crop, Direct, Gathers, ReferenceOptions, RenderOptions};
+use pbgi::render::{Crop, Direct, Gathers, ReferenceOptions, RenderOptions, Tiles};
+
+use crate::farm::{Frames, StitchArgs};
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
 use crate::view::ViewArgs;
@@ -37,6 +39,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Point-based GI against the path tracer at equal error: curves of error against run time.
     Report(ReportArgs),
+    /// Join a frame's tiles (render --tiles, one farm task each) into the frame.
+    Stitch(StitchArgs),
     /// List the scene names: built-in, and fetched ones with whether their files are present.
     Scenes,
 }
@@ -155,6 +159,10 @@ pub struct ReportArgs {
     /// normals: a curve of its own, "… + OIDN" (the `denoise` feature).
     #[arg(long)]
     pub denoise: bool,
+    /// The scene's name in OUT/summary.md, a row of the README's table
+    /// (`scripts/expect.sh`); default: the scene's name and image size.
+    #[arg(long)]
+    pub title: Option<String>,
     /// Measure a shot instead of one image: each frame's error and the
     /// flicker (each frame-to-frame change against the true change) of
     /// point-based GI (--spp, default 4,16,64) and the path tracer
@@ -418,6 +426,17 @@ pub struct RenderArgs {
     /// Render only pixels x0..x1, y0..y1 of the frame (an image of that size).
     #[arg(long, value_name = "X0,Y0,X1,Y1")]
     pub crop: Option<Crop>,
+    /// Render only these frames of --camera-path, K or A-B (inclusive,
+    /// numbered from 0 as the files are): one task of a farm.
+    #[arg(long, value_name = "K|A-B", requires = "camera_path")]
+    pub frames: Option<Frames>,
+    /// Cut the frame into COLUMNS,ROWS tiles and render tile --tile alone
+    /// (numbered row by row from the top left); `pbgi stitch` joins them.
+    #[arg(long, value_name = "COLUMNS,ROWS", requires = "tile", conflicts_with = "crop")]
+    pub tiles: Option<Tiles>,
+    /// The tile of --tiles to render.
+    #[arg(long, value_name = "K", requires = "tiles")]
+    pub tile: Option<u32>,
     /// Seed of every random choice: surfel placement, light and camera
     /// samples (two seeds give independent images; the same seed, the same
     /// image bit for bit on any machine and thread count).

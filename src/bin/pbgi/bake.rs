@@ -46,6 +46,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     let file = file?;
     let seconds = t0.elapsed().as_secs_f64();
     let bytes = file.to_bytes();
+    crate::images::make_folder_for(&out_path)?;
     std::fs::write(&out_path, &bytes)
         .map_err(|e| crate::exit::output(format!("{}: {e}", out_path.display())))?;
     let b = file.bake();

@@ -8,7 +8,9 @@ mod bake;
 mod cache;
 mod denoise;
 mod exit;
+mod farm;
 mod flicker;
+mod images;
 mod overrides;
 mod path;
 mod progress;
@@ -24,11 +26,12 @@ use args::{
     parse_choices,
 };
 use clap::Parser;
+pub(crate) use images::{read_exr, write_image};
 use overrides::{print_notes, set_view};
 use pbgi::SchemeChoice;
 use pbgi::render::{
-    Frame, Gathers, Image, ReferenceOptions, RenderError, RenderOptions, RenderOutput, file_bounces,
-    file_spp, render_reference,
+    Frame, Gathers, ReferenceOptions, RenderError, RenderOptions, RenderOutput, file_bounces, file_spp,
+    render_reference,
 };
 use pbgi::report::{BenchOptions, BenchReceivers, BenchRow, bench};
 use pbgi::scene::resolve;
@@ -44,6 +47,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => cmd_bench(&args),
         Some(Command::Compare(args)) => cmd_compare(&args),
         Some(Command::Report(args)) => report::cmd_report(&args),
+        Some(Command::Stitch(args)) => farm::cmd_stitch(&args),
         Some(Command::Scenes) => cmd_scenes(),
         None => cmd_render(&RenderArgs::default()),
     };
@@ -127,7 +131,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
     let read = clock.elapsed().as_secs_f64();
     set_view(&mut scene, &a.view)?;
     let resolved = overrides::resolve(&scene, &a.scene, options(a)?, &a.settings, a.spp);
-    let opts = resolved.options;
+    let opts = farm::tile_crop(resolved.options, a, &scene)?;
     let out_path = match &a.camera_path {
         Some(_) => path::pattern(a.output.as_deref(), &scene.name)?,
         None => {
@@ -168,7 +172,7 @@ fn cmd_render(a: &RenderArgs) -> Res<()> {
         None => None,
     };
     if let Some(file) = &a.camera_path {
-        path::render_path(&scene, &opts, &mut frame, file, &out_path, &pool)?;
+        path::render_path(&scene, &opts, &mut frame, (file, a.frames), &out_path, &pool)?;
         return cache.map_or(Ok(()), |c| c.close(&frame));
     }
     let bar = progress_bar("tiles", format!("rendering {}", scene.name));
@@ -347,40 +351,6 @@ pub(crate) fn check_output(path: &Path) -> Res<()> {
             path.display()
         ))),
     }
-}
-
-pub(crate) fn write_image(img: &Image, path: &Path) -> Res<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext == "exr" {
-        use exr::prelude::*;
-        let w = img.width as usize;
-        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
-            let p: glam::Vec3 = img.pixels[y * w + x];
-            (p.x, p.y, p.z)
-        });
-        // Blocks compressed one after the other, so they are written in line
-        // order: the parallel writer writes them as they finish, and the same
-        // pixels would make a different file from run to run.
-        exr::prelude::Image::from_channels((w, img.height as usize), channels)
-            .write()
-            .non_parallel()
-            .to_file(path)
-            .map_err(|e| exit::output(format!("{}: {e}", path.display())))?;
-    } else {
-        image::save_buffer(
-            path,
-            &img.to_srgb8(),
-            img.width,
-            img.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| exit::output(format!("{}: {e}", path.display())))?;
-    }
-    Ok(())
 }
 
 pub(crate) fn print_summary(
@@ -575,23 +545,4 @@ fn print_table1(rows: &[BenchRow], o: &RenderOptions) {
             r.frame_s()
         );
     }
-}
-
-pub(crate) fn read_exr(path: &Path) -> Res<pbgi::render::Image> {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![glam::Vec3::ZERO; res.width() * res.height()]),
-        |(w, px): &mut (usize, Vec<glam::Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = glam::Vec3::new(r, g, b);
-        },
-    )
-    .map_err(|e| exit::input(format!("{}: {e}", path.display())))?;
-    let size = img.layer_data.size;
-    let (_, pixels) = img.layer_data.channel_data.pixels;
-    Ok(pbgi::render::Image {
-        width: size.width() as u32,
-        height: size.height() as u32,
-        pixels,
-    })
 }

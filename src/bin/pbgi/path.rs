@@ -8,6 +8,7 @@ use pbgi::scene::Scene;
 use pbgi::scene::formats::read_camera_path;
 
 use crate::args::Res;
+use crate::farm::Frames;
 use crate::progress::{progress_bar, tick};
 use crate::{check_output, print_summary, write_image};
 
@@ -38,28 +39,39 @@ pub fn pattern(output: Option<&Path>, scene: &str) -> Res<PathBuf> {
     }
 }
 
-/// Renders the frames of the path in `file` with `frame`'s bake, writing
-/// each to `pattern`, and prints the first frame's summary and the time per
-/// frame after it.
+/// Renders the frames of the path in `file` (those of `frames`, or all)
+/// with `frame`'s bake, writing each to `pattern`, and prints the first
+/// frame's summary and the time per frame after it.
 pub fn render_path(
     scene: &Scene,
     opts: &RenderOptions,
     frame: &mut Frame<'_>,
-    file: &Path,
+    (file, frames): (&Path, Option<Frames>),
     pattern: &Path,
     pool: &rayon::ThreadPool,
 ) -> Res<()> {
     let cameras = cameras(file, scene)?;
-    for k in 0..cameras.len() {
+    let frames = match frames {
+        Some(f) => f.within(cameras.len())?,
+        None => Frames {
+            first: 0,
+            last: cameras.len().saturating_sub(1),
+        },
+    };
+    for k in frames.first..=frames.last {
         check_output(&frame_file(pattern, k))?;
     }
-    let n = cameras.len();
+    let n = frames.last + 1 - frames.first;
     let bar = progress_bar("frames", format!("rendering {n} frames of {}", scene.name));
     tick(&bar, 0, n);
     let mut seconds = Vec::with_capacity(n);
     let mut first = None;
     let mut written = Vec::new();
-    for (k, camera) in cameras.into_iter().enumerate() {
+    for (k, camera) in cameras
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| frames.contains(*k))
+    {
         let clock = Instant::now();
         frame.set_camera(camera)?;
         let out = pool.install(|| frame.render(&|_, _| {}))?;
@@ -73,7 +85,7 @@ pub fn render_path(
             out.image.digest()
         ));
         first.get_or_insert(out);
-        tick(&bar, k + 1, n);
+        tick(&bar, k + 1 - frames.first, n);
     }
     bar.finish_and_clear();
     let first = first.expect("a camera path has frames");

@@ -3,12 +3,13 @@
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use pbgi::render::{ReferenceOptions, render_reference};
+use pbgi::render::{ReferenceOptions, RenderOptions, render_reference};
 use pbgi::report::plot::write_plots;
 use pbgi::report::{
-    Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, ErrorPoint, External, Grid, Method, SweepOptions,
-    SweepProgress, check_reference, compare, default_curves, describe, emitter_mask, equal_error_markdown,
-    error_sweep, external_points, from_csv, mean_reference, to_csv, to_markdown,
+    Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, ErrorPoint, External, Grid, Method, OIDN_SUFFIX,
+    SweepOptions, SweepProgress, check_reference, compare, default_curves, describe, emitter_mask,
+    equal_error_markdown, error_sweep, external_points, from_csv, mean_reference, summary_header,
+    summary_row, to_csv, to_markdown,
 };
 use pbgi::scene::Scene;
 
@@ -87,7 +88,7 @@ fn sweep_options(a: &ReportArgs, scene: &pbgi::scene::Scene) -> Res<SweepOptions
         let denoised: Vec<Curve> = curves
             .iter()
             .map(|c| Curve {
-                label: format!("{} + OIDN", c.label),
+                label: format!("{}{OIDN_SUFFIX}", c.label),
                 denoised: true,
                 ..c.clone()
             })
@@ -281,9 +282,22 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
              the scene's load included, Mitsuba's JIT warm."
         }
     );
+    let title = a.title.clone().unwrap_or_else(|| {
+        let c = &scene.camera;
+        format!("{}, {} × {}", scene.name, c.width, c.height)
+    });
+    // The library's default camera samples, whatever a scene file asks
+    // for: the rows of the README's table compare alike.
+    let spp = RenderOptions::default().spp;
+    let summary = format!(
+        "{}\n{}\n",
+        summary_header(spp, &targets),
+        summary_row(&title, &points, &targets, spp)
+    );
     let files = [
         ("error.csv", to_csv(&scene.name, &points)),
         ("error.md", to_markdown(&scene.name, &points, &targets, &context)),
+        ("summary.md", summary),
     ];
     for (name, text) in &files {
         let p = a.out.join(name);
@@ -294,8 +308,8 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     write_plots(&points, &targets, &title, &png, &svg)?;
     println!("sweep: {} images in {}", points.len(), clock(took));
     print!("{}", equal_error_markdown(&points, &targets));
-    let written =
-        ["error.csv", "error.md", "error.png", "error.svg"].map(|n| a.out.join(n).display().to_string());
+    let written = ["error.csv", "error.md", "summary.md", "error.png", "error.svg"]
+        .map(|n| a.out.join(n).display().to_string());
     println!("wrote {}", written.join(", "));
     Ok(())
 }
