@@ -77,8 +77,8 @@ gen() { # file body
         printf 'PBGI=%q SCENE=%q CAMERA_PATH=%q OUT=%q STATUS=%q\n' \
             "$PBGI" "$SCENE" "$CAMERA_PATH" "$OUT" "$RUN/status"
         printf 'COLS=%q ROWS=%q TPF=%q\n' "$COLS" "$ROWS" "$TPF"
-        printf 'EXTRA=('; printf ' %q' "${EXTRA[@]+"${EXTRA[@]}"}"; printf ' )\n'
-        printf 'SETTINGS=('; printf ' %q' "${SETTINGS[@]+"${SETTINGS[@]}"}"; printf ' )\n'
+        # The arrays as bash declares them (printf '%q' of none prints '').
+        declare -p EXTRA SETTINGS
         # finish NAME: run the command line in "$@", leave NAME.ok or NAME.fail
         cat <<'BODY'
 finish() {
