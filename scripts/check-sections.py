@@ -17,7 +17,7 @@ def leads(path):
         out += [norm(m.group(1)) for m in re.finditer(r"\*\*([^*]+)\*\*", t)]
         leads_cache[path] = out
     return leads_cache[path]
-pat = re.compile(r"(?:\]\(([^)\s#]+\.md)(?:#[^)]*)?\)|((?:docs/[\w./-]+|BENCHMARKS)\.md|guide\.md|options\.md))`?\)?,?\s*\(?\s*\"([^\"]{3,90})\"")
+pat = re.compile(r"(?:\]\(([^)\s#]+\.md)(?:#[^)]*)?\)|(?<![\"\w/])((?:docs/[\w./-]+|BENCHMARKS)\.md|guide\.md|options\.md))`?\)?,?\s*\(?\s*\"([^\"]{3,90})\"")
 bad = n = 0
 for f in tracked:
     if not f.endswith((".md", ".rs", ".sh", ".py", ".toml")) and f != ".ci/run":

@@ -156,7 +156,8 @@ pub struct ReportArgs {
     #[arg(long)]
     pub denoised: Vec<PathBuf>,
     /// Also each point-based curve through Intel OIDN, guided by albedo and
-    /// normals: a curve of its own, "… + OIDN" (the `denoise` feature).
+    /// normals: a curve of its own, "… + OIDN" (the `denoise` feature); with
+    /// --camera-path, each frame, as rows of their own.
     #[arg(long)]
     pub denoise: bool,
     /// The scene's name in OUT/summary.md, a row of the README's table

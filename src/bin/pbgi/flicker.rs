@@ -7,7 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use pbgi::render::{Frame, Image, ReferenceOptions, render_reference};
-use pbgi::report::{Flicker, emitter_mask, external_points, flicker};
+use pbgi::report::{Flicker, OIDN_SUFFIX, emitter_mask, external_points, flicker};
 use pbgi::scene::Scene;
 
 use crate::args::{ReportArgs, Res};
@@ -28,6 +28,9 @@ struct Row {
 }
 
 pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
+    if a.denoise {
+        crate::denoise::available()?;
+    }
     let mut scene = load_scene(&a.scene)?;
     crate::overrides::set_view(&mut scene, &a.view)?;
     let cameras = crate::path::cameras(path_file, &scene)?;
@@ -80,14 +83,26 @@ pub fn cmd_flicker(a: &ReportArgs, path_file: &Path) -> Res<()> {
         let o = pbgi::render::RenderOptions { spp, ..opts };
         let clock = Instant::now();
         let mut frame = pool.install(|| Frame::prepare(&scene, &o))?;
-        let mut frames = Vec::with_capacity(n);
+        let (mut frames, mut clean) = (Vec::with_capacity(n), Vec::new());
+        // The denoiser's own seconds (guides and filter), apart.
+        let mut denoising = 0.0;
         for camera in &cameras {
             frame.set_camera(*camera)?;
-            frames.push(pool.install(|| frame.render(&|_, _| {}))?.image);
+            let image = pool.install(|| frame.render(&|_, _| {}))?.image;
+            if a.denoise {
+                let start = Instant::now();
+                clean.push(crate::denoise::denoise(&frame, &image, &pool)?.0);
+                denoising += start.elapsed().as_secs_f64();
+            }
+            frames.push(image);
         }
-        let seconds = clock.elapsed().as_secs_f64() / n as f64;
+        let seconds = (clock.elapsed().as_secs_f64() - denoising) / n as f64;
         eprintln!("point-based GI, {spp} spp: {seconds:.2} s per frame");
         rows.push(measure("pbgi".into(), spp, frames, seconds)?);
+        if a.denoise {
+            let with = seconds + denoising / n as f64;
+            rows.push(measure(format!("pbgi{OIDN_SUFFIX}"), spp, clean, with)?);
+        }
     }
     for &spp in a.path_tracer_spp.as_deref().unwrap_or(&PATH_TRACER_SPP) {
         let clock = Instant::now();
