@@ -23,7 +23,7 @@ cd "$(dirname "$0")/.."
 refs=${1:?"usage: scripts/expect.sh REFS [OUT]"}
 out=${2:-target/expect}
 mkdir -p "$out"
-targets=5,3,2
+targets=5,3,2,1.5,1
 # One curve, the defaults, as their camera samples rise (and through OIDN).
 common=(--targets "$targets" --gathers cache --spp 1,2,4,8,16 --path-tracer-spp 16)
 

@@ -56,3 +56,59 @@ fn guides_of_another_size_are_a_typed_error() {
         r => panic!("expected a size error, got {:?}", r.map(|i| i.digest())),
     }
 }
+
+/// `pbgi report --camera-path … --denoise`: each point-based row has a row
+/// of its frames through OIDN beside it, measured against the same
+/// references.
+#[test]
+fn the_flicker_report_measures_the_denoised_frames_too() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("denoise-flicker");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("shot.json");
+    std::fs::write(
+        &path,
+        r#"{"frames": [{"origin": [0, 0, 3.9], "target": [0, 0, 2.9]},
+                       {"origin": [0.02, 0, 3.8], "target": [0, 0, 2.9]}]}"#,
+    )
+    .unwrap();
+    let (path, out) = (path.to_str().unwrap(), dir.to_str().unwrap());
+    let run = crate::common::pbgi_command()
+        .args([
+            "report",
+            "cornell-box",
+            "--camera-path",
+            path,
+            "--resolution",
+            "24x24",
+        ])
+        .args([
+            "--reference-spp",
+            "16",
+            "--spp",
+            "1",
+            "--path-tracer-spp",
+            "1",
+            "--bounces",
+            "1",
+        ])
+        .args(["--denoise", "--out", out])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let table = std::fs::read_to_string(dir.join("flicker.md")).unwrap();
+    // A row's figures, after its label and spp.
+    let row = |label: &str| {
+        let start = format!("| {label} | 1 |");
+        table
+            .lines()
+            .find_map(|l| l.strip_prefix(&start))
+            .unwrap_or_else(|| panic!("no {label} row in\n{table}"))
+            .split(" | ")
+            .take(2)
+            .collect::<Vec<_>>()
+            .join(" | ")
+    };
+    // Another image, so another error: the denoiser ran on the frames.
+    assert_ne!(row("pbgi"), row("pbgi + OIDN"), "{table}");
+}
