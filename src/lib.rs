@@ -9,16 +9,13 @@
 //! use pbgi::{Gather, GatherOptions, PointCloud, Surfel, Tree};
 //!
 //! // A glowing 1 × 1 ceiling at height 1, facing down: 32 × 32 disks.
-//! let surfels: Vec<Surfel> = (0..1024)
-//!     .map(|i| Surfel {
-//!         position: Vec3::new((i % 32) as f32 / 32.0, 1.0, (i / 32) as f32 / 32.0),
-//!         normal: -Vec3::Y,
-//!         radius: 1.0 / 32.0 / std::f32::consts::PI.sqrt(), // the cell's area
-//!         radiance: Vec3::ONE,
-//!     })
-//!     .collect();
-//! let tree = Tree::build(&PointCloud::new(surfels)?);
-//! let gather = Gather::new(&tree, &GatherOptions { threads: Some(1), ..Default::default() })?;
+//! let radius = 1.0 / 32.0 / std::f32::consts::PI.sqrt(); // a disk the area of its cell
+//! let surfels = (0..1024).map(|i| {
+//!     let position = Vec3::new((i % 32) as f32 / 32.0, 1.0, (i / 32) as f32 / 32.0);
+//!     Surfel { position, normal: -Vec3::Y, radius, radiance: Vec3::ONE }
+//! });
+//! let tree = Tree::build(&PointCloud::new(surfels.collect())?);
+//! let gather = Gather::new(&tree, &GatherOptions::default())?;
 //! let e = gather.irradiance(&[(Vec3::new(0.5, 0.0, 0.5), Vec3::Y)])?; // (position, normal)
 //! assert!(e[0].x > 0.0 && e[0].x < std::f32::consts::PI);
 //! # Ok::<(), pbgi::Error>(())
