@@ -14,12 +14,9 @@ use rayon::prelude::*;
 /// Surfels that share one gather of the environment's light or of an
 /// extra bounce: a subtree of at most this many, flat within [`FLAT`]
 /// (about a 3 × 3 patch), which shrinks with the surfels as the density
-/// grows. Gathering at every surfel was most of a frame with a sky (the
-/// sunlit room 3.19 s, 1.77 s of it in `pre.`, two threads) and of
-/// `--bounces 2`; with groups of 8 the room takes 1.98 s at 5.07 % against
-/// 5.04 % (bias −1.36 % against −1.30 %), the atrium 1.71 s against 3.38 s
-/// at 8.23 % against 8.19 %, the Cornell box at `--bounces 2` 1.53 s
-/// against 3.86 s at 2.02 % against 2.01 % (docs/lab/gather-cost.md).
+/// grows. Gathering at every surfel was most of a frame with a sky and of
+/// `--bounces 2`; groups of 8 take about half of it at the same error and
+/// bias (docs/lab/gather-cost.md has the figures).
 const SURFEL_GROUP: usize = 8;
 
 /// Cosine of the widest normal cone a group of surfels sharing one gather

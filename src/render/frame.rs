@@ -459,8 +459,8 @@ impl<'s> Frame<'s> {
         let incident = Self::incident(cached.as_ref(), &incident_caches);
 
         // Every tile its own job: rayon's default split ran a quarter of
-        // Sponza's tiles as one unsplittable run, and its last 4.5 s of 14
-        // on one core while the other idled.
+        // a large scene's tiles as one unsplittable run, on one core while
+        // the other idled.
         let tiles: Vec<TileResult> = (0..tiles_total)
             .into_par_iter()
             .with_max_len(1)
