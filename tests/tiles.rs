@@ -32,6 +32,16 @@ fn pbgi(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// Runs `pbgi ARGS`, which must fail with `want` in its error.
+fn fails(args: &[&str], want: &str) {
+    let out = common::pbgi_command().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains(want),
+        "pbgi {args:?}: {err}"
+    );
+}
+
 /// Width, height and the RGB bits of an EXR the CLI wrote (linear radiance).
 fn read_exr(path: &Path) -> (usize, usize, Vec<[u32; 3]>) {
     use exr::prelude::*;
@@ -105,14 +115,6 @@ fn bad_crops_and_trees_are_errors_naming_them() {
     std::fs::create_dir_all(&dir).unwrap();
     let scene = small_scene(&dir);
     let scene = scene.to_str().unwrap();
-    let fails = |args: &[&str], want: &str| {
-        let out = common::pbgi_command().args(args).output().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && err.contains(want),
-            "pbgi {args:?}: {err}"
-        );
-    };
     let o = dir.join("x.exr");
     let o = o.to_str().unwrap();
     fails(&["render", scene, "-o", o, "--crop", "4,4,4,8"], "empty window");
@@ -230,14 +232,6 @@ fn a_shots_tiles_from_one_bake_stitch_into_the_frames_of_one_render() {
 
     // A frame past the path, a tile past the grid, and a missing tile are
     // errors naming them.
-    let fails = |args: &[&str], want: &str| {
-        let out = common::pbgi_command().args(args).output().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && err.contains(want),
-            "pbgi {args:?}: {err}"
-        );
-    };
     let o = dir.join("x-{}.exr");
     let o = o.to_str().unwrap();
     fails(
