@@ -24,7 +24,7 @@ farm/slurm/one-node.sh > "$out/one-node.log" 2>&1 || {
 sinfo --version
 SECONDS=0
 PBGI=$pbgi SCENE=cornell-box CAMERA_PATH=$path OUT=$out/job FRAMES=3 TILES=2,2 \
-    farm/slurm/shot.sh --wait -- --spp 1 > "$out/shot.log" 2>&1 || {
+    timeout 300 farm/slurm/shot.sh --wait -- --spp 1 > "$out/shot.log" 2>&1 || {
     cat "$out/shot.log" >&2
     exit 1
 }
