@@ -33,12 +33,5 @@ openjd run farm/openjd/shot.yaml --step Stitch --run-dependencies \
     exit 1
 }
 job=$SECONDS
-"$pbgi" render cornell-box --camera-path "$path" --spp 1 \
-    -o "$out/single/frame-{}.exr" > "$out/single.log"
-for k in 0000 0001 0002; do
-    if ! cmp "$out/job/frames/frame-$k.exr" "$out/single/frame-$k.exr"; then
-        echo "frame $k: the OpenJD job's stitched frame differs from one render's (see $out)" >&2
-        exit 1
-    fi
-done
+farm/same-frames.sh "$pbgi" "$path" "$out" "OpenJD job"
 echo "OpenJD job: 3 frames × 4 tiles from one bake in $job s; stitched frames identical to one render's, byte for byte"

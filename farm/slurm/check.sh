@@ -29,11 +29,5 @@ PBGI=$pbgi SCENE=cornell-box CAMERA_PATH=$path OUT=$out/job FRAMES=3 TILES=2,2 \
     exit 1
 }
 job=$SECONDS
-"$pbgi" render cornell-box --camera-path "$path" --spp 1 -o "$out/single/frame-{}.exr" > "$out/single.log"
-for k in 0000 0001 0002; do
-    if ! cmp "$out/job/frames/frame-$k.exr" "$out/single/frame-$k.exr"; then
-        echo "frame $k: the Slurm job's stitched frame differs from one render's (see $out)" >&2
-        exit 1
-    fi
-done
+farm/same-frames.sh "$pbgi" "$path" "$out" "Slurm job"
 echo "Slurm array: 1 bake, 12 tile tasks, 3 stitches in $job s; stitched frames identical to one render's, byte for byte"

@@ -126,9 +126,8 @@ pub fn summary_header(spp: u32, errors: &[f64]) -> String {
 /// extrapolated, `—` not reached, `n/a` not in the sweep).
 pub fn summary_row(title: &str, points: &[ErrorPoint], errors: &[f64], spp: u32) -> String {
     let all = series(points);
-    let first = all
-        .iter()
-        .find(|c| c.method == Method::PointBased && !c.label.ends_with(OIDN_SUFFIX));
+    let plain = |c: &Series| c.method == Method::PointBased && !c.label.ends_with(OIDN_SUFFIX);
+    let first = all.iter().find(|c| plain(c));
     let at_spp = first
         .and_then(|c| c.points.iter().find(|p| p.0 == spp))
         .map_or("n/a".to_string(), |&(_, t, e)| {
@@ -153,7 +152,7 @@ pub fn summary_row(title: &str, points: &[ErrorPoint], errors: &[f64], spp: u32)
             .collect();
         format!("{} s", cells.join(" / "))
     };
-    let pbgi = column(&|c| c.method == Method::PointBased && !c.label.ends_with(OIDN_SUFFIX));
+    let pbgi = column(&plain);
     let pbgi_oidn = column(&|c| c.method == Method::PointBased && c.label.ends_with(OIDN_SUFFIX));
     let denoised = column(&|c| c.method == Method::Denoised);
     format!("| {title} | {at_spp} | {pbgi} | {pbgi_oidn} | {denoised} |")

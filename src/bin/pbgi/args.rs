@@ -5,10 +5,9 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use pbgi::gather::MAX_THREADS;
 use pbgi::render::{Crop, Direct, Gathers, ReferenceOptions, RenderOptions, Tiles};
-
-use crate::farm::{Frames, StitchArgs};
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
+use crate::farm::{Frames, StitchArgs};
 use crate::view::ViewArgs;
 
 #[derive(Parser)]

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use pbgi::render::{RenderOptions, Tiles};
+use pbgi::render::{RenderOptions, TileError, Tiles};
 use pbgi::scene::Scene;
 
 use crate::args::{RenderArgs, Res};
@@ -24,11 +24,6 @@ pub struct Frames {
 }
 
 impl Frames {
-    /// Whether frame `k` is in the range.
-    pub fn contains(&self, k: usize) -> bool {
-        (self.first..=self.last).contains(&k)
-    }
-
     /// The range within a path of `n` frames; an error names both.
     pub fn within(self, n: usize) -> Res<Frames> {
         if self.last >= n {
@@ -101,7 +96,10 @@ pub struct StitchArgs {
 /// The file of tile `tile` of frame `frame` (if any) after `pattern`.
 fn tile_file(pattern: &Path, frame: Option<usize>, tile: u32) -> PathBuf {
     let named = PathBuf::from(pattern.to_string_lossy().replace("{tile}", &tile.to_string()));
-    frame.map_or(named.clone(), |k| frame_file(&named, k))
+    match frame {
+        Some(k) => frame_file(&named, k),
+        None => named,
+    }
 }
 
 pub fn cmd_stitch(a: &StitchArgs) -> Res<()> {
@@ -126,10 +124,14 @@ pub fn cmd_stitch(a: &StitchArgs) -> Res<()> {
         let tiles = (0..a.tiles.count())
             .map(|k| read_exr(&tile_file(&a.pattern, frame, k)))
             .collect::<Res<Vec<_>>>()?;
-        let image = a
-            .tiles
-            .stitch(&tiles)
-            .map_err(|e| exit::input(format!("{}: {e}", tile_file(&a.pattern, frame, 0).display())))?;
+        // A tile of the wrong size is named by its file; the rest by the pattern.
+        let image = a.tiles.stitch(&tiles).map_err(|e| {
+            let file = match e {
+                TileError::Size { tile, .. } => tile_file(&a.pattern, frame, tile),
+                _ => a.pattern.clone(),
+            };
+            exit::input(format!("{}: {e}", file.display()))
+        })?;
         let out = frame.map_or(a.output.clone(), |k| frame_file(&a.output, k));
         write_image(&image, &out)?;
         println!(

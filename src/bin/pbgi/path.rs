@@ -67,11 +67,7 @@ pub fn render_path(
     let mut seconds = Vec::with_capacity(n);
     let mut first = None;
     let mut written = Vec::new();
-    for (k, camera) in cameras
-        .into_iter()
-        .enumerate()
-        .filter(|(k, _)| frames.contains(*k))
-    {
+    for (k, camera) in cameras.into_iter().enumerate().skip(frames.first).take(n) {
         let clock = Instant::now();
         frame.set_camera(camera)?;
         let out = pool.install(|| frame.render(&|_, _| {}))?;

@@ -282,7 +282,7 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
              the scene's load included, Mitsuba's JIT warm."
         }
     );
-    let title = a.title.clone().unwrap_or_else(|| {
+    let row_title = a.title.clone().unwrap_or_else(|| {
         let c = &scene.camera;
         format!("{}, {} × {}", scene.name, c.width, c.height)
     });
@@ -292,7 +292,7 @@ pub fn cmd_report(a: &ReportArgs) -> Res<()> {
     let summary = format!(
         "{}\n{}\n",
         summary_header(spp, &targets),
-        summary_row(&title, &points, &targets, spp)
+        summary_row(&row_title, &points, &targets, spp)
     );
     let files = [
         ("error.csv", to_csv(&scene.name, &points)),
