@@ -128,6 +128,10 @@ pub enum Sight {
         /// `|normal · dir|` at the hit.
         cos: f32,
     },
+    /// A surface where no opening lies beside the hit, however edge-on
+    /// the ray meets it: a smooth part of a closed mesh, away from any
+    /// boundary or crease (the renderer's `edged` triangles are the others).
+    Smooth,
 }
 
 /// One receiver's near field: the nodes its composition leaves out, and per

@@ -88,6 +88,10 @@ pub(super) fn open(
                 open.push(0.0);
                 cos
             }
+            Sight::Smooth => {
+                open.push(0.0);
+                1.0
+            }
         };
         grazing.push(if cos < GRAZING { 1.0f32 } else { 0.0 });
         deep.push(cos < GRAZING / 4.0);

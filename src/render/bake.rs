@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::bounces::{SkyRays, gather_bounce, gather_sky};
+use super::bounces::{SkyRays, gather_bounce, gather_sky, group_size};
 use super::light::Lights;
 use super::options::{Gathers, RenderOptions};
 use super::output::{PreTimings, Progress, RenderError, Stage};
@@ -188,6 +188,7 @@ pub(super) fn build(
     let scheme = opts.scheme.resolve(LANES);
     let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
     let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
+    let group = group_size(direct.len(), opts.surfel_gathers);
     let mut cloud = baked.cloud;
     if environment.is_some() {
         // The environment's light at the surfels, gathered with the
@@ -215,6 +216,7 @@ pub(super) fn build(
                 &direct,
                 &baked.albedo,
                 &dark_tree,
+                group,
                 &gopts,
                 &SkyRays(tracer),
                 &|d, n| progress(SKY, d, n),
@@ -235,6 +237,7 @@ pub(super) fn build(
             &direct,
             &baked.albedo,
             &built,
+            group,
             &gopts,
             Some(&rays),
             &|d, n| progress(BOUNCE, d, n),

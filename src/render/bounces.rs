@@ -12,12 +12,22 @@ use crate::tree::{NodeId, Tree};
 use rayon::prelude::*;
 
 /// Surfels that share one gather of the environment's light or of an
-/// extra bounce: a subtree of at most this many, flat within [`FLAT`]
-/// (about a 3 × 3 patch), which shrinks with the surfels as the density
-/// grows. Gathering at every surfel was most of a frame with a sky and of
-/// `--bounces 2`; groups of 8 take about half of it at the same error and
-/// bias (docs/lab/gather-cost.md has the figures).
+/// extra bounce, at the least: a subtree of at most this many, flat within
+/// [`FLAT`] (about a 3 × 3 patch). Gathering at every surfel was most of a
+/// frame with a sky and of `--bounces 2`; groups of 8 take about half of
+/// it at the same error and bias (docs/lab/gather-cost.md has the figures).
 const SURFEL_GROUP: usize = 8;
+
+/// The most surfels of `surfels` that share one gather, for about
+/// `gathers` of them (`0`: [`SURFEL_GROUP`]): each group then stands for
+/// the same share of the scene's area at any density, so that a bake of
+/// 10⁷ surfels gathers about as often as one of 52,000.
+pub(super) fn group_size(surfels: usize, gathers: u32) -> usize {
+    match gathers {
+        0 => SURFEL_GROUP,
+        g => SURFEL_GROUP.max(surfels / g as usize),
+    }
+}
 
 /// Cosine of the widest normal cone a group of surfels sharing one gather
 /// may have (18°, as the sparse lattice's one surface).
@@ -25,14 +35,17 @@ const FLAT: f32 = 0.95;
 
 /// One more bounce at the surfels: each surfel's radiance becomes its direct
 /// part plus `albedo/π · E`, with `E` gathered from the current cloud once
-/// per group of at most [`SURFEL_GROUP`] surfels (a subtree of `tree` whose
-/// normals lie within [`FLAT`]'s cone, gathered at its centroid), with
-/// `rays` as the gather's near field (the sky by rays) if given.
+/// per group of at most `group` surfels ([`group_size`]: a subtree of
+/// `tree` whose normals lie within [`FLAT`]'s cone, gathered at its
+/// centroid), with `rays` as the gather's near field (the sky by rays) if
+/// given.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn gather_bounce(
     cloud: &PointCloud,
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
+    group: usize,
     opts: &GatherOptions,
     rays: Option<&dyn NearField>,
     tick: &(dyn Fn(usize, usize) + Sync),
@@ -42,7 +55,9 @@ pub(super) fn gather_bounce(
         Some(field) => gather.with_near_field(field),
         None => gather,
     };
-    add_gathered(cloud, direct, albedo, tree, tick, |part| gather.irradiance(part))
+    add_gathered(cloud, direct, albedo, tree, group, tick, |part| {
+        gather.irradiance(part)
+    })
 }
 
 /// The environment's light at the surfels, grouped as [`gather_bounce`]'s,
@@ -50,18 +65,20 @@ pub(super) fn gather_bounce(
 /// sky by rays, the surfels are no occluders the gather needs, so no cut
 /// is taken and nothing is splatted (the same light as a gather over the
 /// surfels made black, without its traversal and composition).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn gather_sky(
     cloud: &PointCloud,
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
+    group: usize,
     opts: &GatherOptions,
     rays: &dyn NearField,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PointCloud, Error> {
     let proto = MicroBuffer::new(opts.microbuffer)?.with_environment(opts.environment.clone());
     let empty = Tree::default();
-    add_gathered(cloud, direct, albedo, tree, tick, |part| {
+    add_gathered(cloud, direct, albedo, tree, group, tick, |part| {
         Ok(part
             .par_chunks(64)
             .flat_map_iter(|chunk| {
@@ -85,11 +102,12 @@ fn add_gathered(
     direct: &[Vec3],
     albedo: &[Vec3],
     tree: &Tree,
+    group: usize,
     tick: &(dyn Fn(usize, usize) + Sync),
     gather: impl Fn(&[(Vec3, Vec3)]) -> Result<Vec<Vec3>, Error>,
 ) -> Result<PointCloud, Error> {
     let surfels = cloud.surfels();
-    let (receivers, members) = groups(tree, surfels, SURFEL_GROUP);
+    let (receivers, members) = groups(tree, surfels, group);
     // A receiver's light is the same in any packet or run.
     let run = (receivers.len() / 64).max(4096);
     let mut gathered = Vec::with_capacity(receivers.len());
@@ -239,5 +257,23 @@ mod tests {
         // subtrees hold both faces, are mostly gathered one by one).
         let floor = members.iter().filter(|m| m.iter().any(|&i| i % 3 == 0)).count();
         assert!(floor * 4 < 400, "{floor} gathers for the floor's 400 surfels");
+        // Larger groups share more: the floor in a few gathers.
+        let (_, members) = groups(&tree, cloud.surfels(), 64);
+        let floor = members.iter().filter(|m| m.iter().any(|&i| i % 3 == 0)).count();
+        assert!(
+            floor * 16 < 400,
+            "{floor} gathers for the floor's 400 surfels in groups of 64"
+        );
+    }
+
+    /// Groups grow with the surfels past the gathers asked for, so that a
+    /// finer bake gathers about as often; never below 8.
+    #[test]
+    fn groups_grow_with_the_surfels_past_the_gathers_asked_for() {
+        assert_eq!(group_size(51_993, 6_500), SURFEL_GROUP);
+        assert_eq!(group_size(1_000_000, 6_500), 153);
+        assert_eq!(group_size(10_000_000, 6_500), 1_538);
+        assert_eq!(group_size(10_000_000, 0), SURFEL_GROUP);
+        assert_eq!(group_size(100, 6_500), SURFEL_GROUP);
     }
 }

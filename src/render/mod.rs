@@ -27,6 +27,7 @@ mod cached;
 mod camera_samples;
 #[cfg(feature = "denoise")]
 mod denoise;
+mod edged;
 mod frame;
 mod guides;
 mod image;

@@ -9,6 +9,10 @@ use crate::scene::Scene;
 /// gets at density 2000 (51,965 surfels).
 pub const DEFAULT_SURFEL_BUDGET: u32 = 52_000;
 
+/// About how many gathers the environment's light and each extra bounce
+/// take at the surfels by default: groups of 8 at the default budget.
+pub const DEFAULT_SURFEL_GATHERS: u32 = DEFAULT_SURFEL_BUDGET / 8;
+
 /// Which light an image holds: the indirect part alone is what the gather
 /// computes, and what its error is measured on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -213,6 +217,12 @@ pub struct RenderOptions {
     pub surfel_budget: Option<u32>,
     /// Area-light samples per surfel.
     pub surfel_light_samples: u32,
+    /// About this many gathers of the environment's light, and of each
+    /// extra bounce, at the surfels whatever their number: surfels share
+    /// one in flat groups of at least 8, each over about the same share of
+    /// the scene's area at any budget (more on curved parts, whose groups
+    /// stay flat). `0`: groups of 8 however many surfels.
+    pub surfel_gathers: u32,
     /// Which light the image holds.
     pub component: Component,
     /// Seed of every random choice.
@@ -378,6 +388,7 @@ impl Default for RenderOptions {
             density: 2000.0,
             surfel_budget: None,
             surfel_light_samples: 16,
+            surfel_gathers: DEFAULT_SURFEL_GATHERS,
             component: Component::All,
             seed: 1,
             crop: None,

@@ -12,6 +12,7 @@ use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 
+use super::edged::edged;
 use crate::microbuffer::Sight;
 use crate::scene::{AlphaMap, Scene};
 
@@ -53,6 +54,10 @@ pub struct Tracer {
     /// The triangles of cut-out materials: their texture coordinates and cut-out.
     cutouts: Vec<CutOut>,
     alphas: Vec<AlphaMap>,
+    /// Per entry of `triangles`, whether an opening may lie beside it
+    /// ([`edged`]): where it does not, a ray meeting it edge-on is
+    /// [`Sight::Smooth`].
+    edged: Vec<bool>,
     /// Offset that moves ray origins off their surface, relative to the scene size.
     epsilon: f32,
 }
@@ -119,9 +124,15 @@ impl Tracer {
                 cutout_of,
                 cutouts,
                 alphas,
+                edged: Vec::new(),
                 epsilon: 1e-4,
             };
         }
+        let corners: Vec<[Vec3; 3]> = triangles
+            .iter()
+            .map(|t| [t.v0.into(), t.v1.into(), t.v2.into()])
+            .collect();
+        let marks = edged(&corners, |t| cutout_of.get(t).is_some_and(|&c| c != NONE));
         let bvh = build_cwbvh_from_tris(
             &triangles,
             BvhBuildParams::medium_build(),
@@ -142,6 +153,7 @@ impl Tracer {
         } else {
             Vec::new()
         };
+        let edged = bvh.primitive_indices.iter().map(|&i| marks[i as usize]).collect();
         Tracer {
             bvh: Some(bvh),
             triangles,
@@ -149,6 +161,7 @@ impl Tracer {
             cutout_of,
             cutouts,
             alphas,
+            edged,
             epsilon: 1e-5 * extent,
         }
     }
@@ -215,13 +228,18 @@ impl Tracer {
     /// For each of `dirs` from one receiver, into `out`: the sky where the
     /// ray leaves the scene, else a triangle that stops it (the first one
     /// found, not always the nearest: a thick wall's far face is as
-    /// edge-on as its near one) and the cosine there.
+    /// edge-on as its near one) and the cosine there, or [`Sight::Smooth`]
+    /// where no opening lies beside that triangle.
     pub fn sight_each(&self, origin: Vec3, normal: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) {
         out.clear();
         self.stops(origin, normal, dirs, |d, stop| {
-            out.push(stop.map_or(Sight::Sky, |id| Sight::Surface {
-                cos: geometric_normal(&self.triangles[id]).dot(d).abs(),
-            }))
+            out.push(match stop {
+                None => Sight::Sky,
+                Some(id) if !self.edged[id] => Sight::Smooth,
+                Some(id) => Sight::Surface {
+                    cos: geometric_normal(&self.triangles[id]).dot(d).abs(),
+                },
+            })
         });
     }
 
@@ -371,6 +389,7 @@ mod tests {
             match *s {
                 Sight::Sky => assert!(e),
                 Sight::Surface { cos } => assert!(!e && (0.0..=1.0).contains(&cos), "{s:?}"),
+                Sight::Smooth => panic!("the box's walls are edged"),
             }
         }
     }

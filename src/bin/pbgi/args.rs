@@ -232,6 +232,11 @@ pub struct Settings {
     /// a file: 52000; the named scenes keep density 2000).
     #[arg(long, value_name = "N", value_parser = bounded_u32(1, MAX_SURFELS), allow_negative_numbers = true)]
     pub surfels: Option<u32>,
+    /// About this many gathers of the sky and of each extra bounce at the
+    /// surfels, whatever their number (flat groups of at least 8 share one;
+    /// 0: groups of 8).
+    #[arg(long, value_name = "N", default_value_t = RenderOptions::default().surfel_gathers)]
+    pub surfel_gathers: u32,
     /// Hybrid: switch an entry to single below this many active lanes.
     #[arg(long, default_value_t = CutOptions::default().hybrid_threshold, help_heading = DEVELOPER)]
     pub hybrid_threshold: u32,
@@ -264,6 +269,7 @@ impl Settings {
             },
             density: self.density.unwrap_or(RenderOptions::default().density),
             surfel_budget: self.surfels,
+            surfel_gathers: self.surfel_gathers,
             ..RenderOptions::default()
         })
     }
