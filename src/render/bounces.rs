@@ -165,8 +165,11 @@ impl NearField for SkyRays<'_> {
 
 /// The receivers of grouped gathers and each one's surfels: the largest
 /// subtrees of at most `group` leaves whose normal cone is within
-/// [`FLAT`], a receiver at the area centroid facing the mean normal;
-/// every other surfel alone.
+/// [`FLAT`], a receiver at the area centroid facing the mean normal. A
+/// subtree of more than [`SURFEL_GROUP`] and at most `group` leaves whose
+/// cone is wider (at a fine budget, a thin wall's two faces fall in one)
+/// is split by its surfels' facing instead ([`facings`]), where each
+/// facing is one [`compact`] patch; every other surfel is alone.
 fn groups(tree: &Tree, surfels: &[Surfel], group: usize) -> (Vec<(Vec3, Vec3)>, Vec<Vec<u32>>) {
     let mut leaves = vec![0u32; tree.len()];
     count(tree, 0, &mut leaves);
@@ -175,7 +178,8 @@ fn groups(tree: &Tree, surfels: &[Surfel], group: usize) -> (Vec<(Vec3, Vec3)>, 
     while let Some(n) = stack.pop() {
         let v = tree.node(n);
         let flat = v.surfel.is_some() || v.cone_cos >= FLAT;
-        if leaves[n as usize] as usize <= group && flat {
+        let k = leaves[n as usize] as usize;
+        if k <= group && flat {
             let mut m = Vec::new();
             collect(tree, n, &mut m);
             let normal = v.normal.normalize_or(v.cone_axis);
@@ -183,11 +187,82 @@ fn groups(tree: &Tree, surfels: &[Surfel], group: usize) -> (Vec<(Vec3, Vec3)>, 
             // A hair above the surface, so it does not see itself edge-on.
             receivers.push((v.centroid + normal * (r * 1e-3), normal));
             members.push(m);
+        } else if let Some(f) = (k <= group && k > SURFEL_GROUP)
+            .then(|| {
+                let mut m = Vec::new();
+                collect(tree, n, &mut m);
+                facings(&m, surfels)
+            })
+            .filter(|f| f.iter().all(|f| compact(f, surfels)))
+        {
+            for f in f {
+                receivers.push(facing_receiver(&f, surfels));
+                members.push(f);
+            }
         } else if let Some(l) = v.children {
             stack.extend([l + 1, l]);
         }
     }
     (receivers, members)
+}
+
+/// `members` split by facing, in order: the first left and every one
+/// within [`FLAT`] of its normal, then again over the rest.
+fn facings(members: &[u32], surfels: &[Surfel]) -> Vec<Vec<u32>> {
+    let mut rest = members.to_vec();
+    let mut out = Vec::new();
+    while let Some(&first) = rest.first() {
+        let axis = surfels[first as usize].normal;
+        let (same, other): (Vec<u32>, Vec<u32>) = rest
+            .iter()
+            .partition(|&&i| surfels[i as usize].normal.dot(axis) >= FLAT);
+        out.push(same);
+        rest = other;
+    }
+    out
+}
+
+/// Whether `members` lie within twice the radius of a disk of their
+/// area (`√Σr²`) of their area centroid: one patch, not the pieces of two
+/// surfaces that face the same way (a floor and a slab's top beside it),
+/// which one gather would not stand for.
+fn compact(members: &[u32], surfels: &[Surfel]) -> bool {
+    let (mut centroid, mut area) = (Vec3::ZERO, 0.0f32);
+    for &i in members {
+        let s = &surfels[i as usize];
+        centroid += s.position * (s.radius * s.radius);
+        area += s.radius * s.radius;
+    }
+    let centroid = centroid / area.max(f32::MIN_POSITIVE);
+    let reach = 4.0 * area;
+    members
+        .iter()
+        .all(|&i| surfels[i as usize].position.distance_squared(centroid) <= reach)
+}
+
+/// The receiver of one facing's surfels: at the surfel nearest their area
+/// centroid (a facing of a subtree need not be one piece, and its centroid
+/// may lie off every surface), a hair above it, facing their mean normal.
+fn facing_receiver(members: &[u32], surfels: &[Surfel]) -> (Vec3, Vec3) {
+    let (mut centroid, mut normal, mut area) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
+    for &i in members {
+        let s = &surfels[i as usize];
+        let a = s.radius * s.radius;
+        centroid += s.position * a;
+        normal += s.normal * a;
+        area += a;
+    }
+    let centroid = centroid / area.max(f32::MIN_POSITIVE);
+    let first = &surfels[members[0] as usize];
+    let normal = normal.normalize_or(first.normal);
+    let mut at = first;
+    for &i in members {
+        let s = &surfels[i as usize];
+        if s.position.distance_squared(centroid) < at.position.distance_squared(centroid) {
+            at = s;
+        }
+    }
+    (at.position + normal * (at.radius * 1e-3), normal)
 }
 
 /// Leaves below each node, into `leaves`; returns `node`'s.
@@ -216,11 +291,9 @@ fn collect(tree: &Tree, node: NodeId, out: &mut Vec<u32>) {
 mod tests {
     use super::*;
 
-    /// The groups partition the surfels, none holds more than `group`, none
-    /// mixes the two faces of a thin slab, and on a flat face most surfels
-    /// share (each gather stands for several).
-    #[test]
-    fn groups_partition_the_surfels_face_by_face() {
+    /// A floor, and a thin slab's two faces 1 cm apart (a subtree of a few
+    /// surfels holds both sides): 400 surfels each, every third the floor's.
+    fn floor_and_slab() -> PointCloud {
         let mut surfels = Vec::new();
         for i in 0..20 {
             for j in 0..20 {
@@ -231,39 +304,53 @@ mod tests {
                     radius: 0.03,
                     radiance: Vec3::ZERO,
                 };
-                // A floor, and a thin slab's two faces 1 cm apart (a
-                // subtree of a few surfels holds both sides).
                 surfels.push(s(Vec3::new(u, 0.0, v), Vec3::Y));
                 surfels.push(s(Vec3::new(2.0 + u, 0.0, v), -Vec3::Y));
                 surfels.push(s(Vec3::new(2.0 + u, 0.01, v), Vec3::Y));
             }
         }
-        let cloud = PointCloud::new(surfels.clone()).unwrap();
+        PointCloud::new(surfels).unwrap()
+    }
+
+    /// Groups of at most `group`, as [`groups`] makes them: asserts that
+    /// they partition the surfels, that none holds more than `group` or
+    /// mixes the slab's faces, and that each receiver lies on its surfels'
+    /// face; returns how many gathers the floor and the slab take.
+    fn gathers_of_floor_and_slab(group: usize) -> (usize, usize) {
+        let cloud = floor_and_slab();
         let tree = Tree::build(&cloud);
-        let (receivers, members) = groups(&tree, cloud.surfels(), SURFEL_GROUP);
-        let mut seen = vec![0; surfels.len()];
+        let (receivers, members) = groups(&tree, cloud.surfels(), group);
+        let mut seen = vec![0; cloud.len()];
         for ((p, n), m) in receivers.iter().zip(&members) {
-            assert!(!m.is_empty() && m.len() <= SURFEL_GROUP, "{}", m.len());
+            assert!(!m.is_empty() && m.len() <= group, "{}", m.len());
             for &i in m {
                 seen[i as usize] += 1;
                 let s = &cloud.surfels()[i as usize];
                 assert!(s.normal.dot(*n) > FLAT, "{} against {n}", s.normal);
-                // The receiver lies on the surfels' face.
                 assert!((*p - s.position).dot(s.normal).abs() < 1e-3);
             }
         }
         assert!(seen.iter().all(|&c| c == 1), "not a partition");
-        // The floor's 400 surfels share gathers (the slab's, whose small
-        // subtrees hold both faces, are mostly gathered one by one).
         let floor = members.iter().filter(|m| m.iter().any(|&i| i % 3 == 0)).count();
+        (floor, members.len() - floor)
+    }
+
+    /// In groups of 8, the floor's 400 surfels share gathers; the slab's,
+    /// whose small subtrees hold both faces, are mostly gathered one by one.
+    #[test]
+    fn groups_partition_the_surfels_face_by_face() {
+        let (floor, _) = gathers_of_floor_and_slab(SURFEL_GROUP);
         assert!(floor * 4 < 400, "{floor} gathers for the floor's 400 surfels");
-        // Larger groups share more: the floor in a few gathers.
-        let (_, members) = groups(&tree, cloud.surfels(), 64);
-        let floor = members.iter().filter(|m| m.iter().any(|&i| i % 3 == 0)).count();
-        assert!(
-            floor * 16 < 400,
-            "{floor} gathers for the floor's 400 surfels in groups of 64"
-        );
+    }
+
+    /// In larger groups (a finer budget) the floor takes a few gathers, and
+    /// so does the slab: a subtree that holds both its faces is split by
+    /// facing rather than into single surfels.
+    #[test]
+    fn larger_groups_share_more_and_split_a_thin_slab_by_facing() {
+        let (floor, slab) = gathers_of_floor_and_slab(64);
+        assert!(floor * 16 < 400, "{floor} gathers for the floor's 400 surfels");
+        assert!(slab * 8 < 800, "{slab} gathers for the slab's 800 surfels");
     }
 
     /// Groups grow with the surfels past the gathers asked for, so that a
