@@ -9,10 +9,11 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::bounces::{SkyRays, gather_bounce, gather_sky, group_size};
+use super::bounces::{SkyRays, gather_bounce, gather_sky};
 use super::light::Lights;
 use super::options::{Gathers, RenderOptions};
 use super::output::{PreTimings, Progress, RenderError, Stage};
+use super::surfel_groups::{Groups, group_size};
 use super::surfels::{BakeOptions, bake_with_progress};
 use super::trace::Tracer;
 use crate::cut::SchemeChoice;
@@ -207,16 +208,16 @@ pub(super) fn build(
         if opts.bounces == 0 {
             cloud = dark;
         } else {
-            let dark_tree = tree(&dark, times);
-            let clock = Instant::now();
             // Which directions see the sky, by rays (`microbuffer::open`):
-            // the dark tree only groups the surfels.
+            // the dark tree, where one is built, only groups the surfels.
+            let dark_tree = Groups::need_tree(group).then(|| tree(&dark, times));
+            let clock = Instant::now();
+            let sky_groups = Groups::new(dark.surfels(), group, dark_tree.as_ref());
             cloud = gather_sky(
                 &dark,
                 &direct,
                 &baked.albedo,
-                &dark_tree,
-                group,
+                &sky_groups,
                 &gopts,
                 &SkyRays(tracer),
                 &|d, n| progress(SKY, d, n),
@@ -229,15 +230,19 @@ pub(super) fn build(
         }
     }
     let mut built = tree(&cloud, times);
+    // The groups depend on the surfels' places and normals alone, the
+    // same for every bounce.
+    let mut bounce_groups = None;
     for _ in 1..opts.bounces.max(1) {
         let clock = Instant::now();
         let rays = SkyRays(tracer);
+        let groups = bounce_groups.get_or_insert_with(|| Groups::new(cloud.surfels(), group, Some(&built)));
         cloud = gather_bounce(
             &cloud,
             &direct,
             &baked.albedo,
             &built,
-            group,
+            groups,
             &gopts,
             Some(&rays),
             &|d, n| progress(BOUNCE, d, n),

@@ -42,6 +42,7 @@ mod share;
 mod sparse;
 mod spherical;
 mod stitch;
+mod surfel_groups;
 mod surfels;
 mod tile;
 mod trace;
