@@ -219,6 +219,9 @@ fn facing_receiver(members: &[u32], surfels: &[Surfel]) -> (Vec3, Vec3) {
     let centroid = centroid / area.max(f32::MIN_POSITIVE);
     let first = &surfels[members[0] as usize];
     let normal = normal.normalize_or(first.normal);
+    // At a surfel, not at the centroid: that lies under a convex part of a
+    // curved surface, where the receiver's rays meet the surface at once
+    // and the sky is lost.
     let mut at = first;
     for &i in members {
         let s = &surfels[i as usize];
