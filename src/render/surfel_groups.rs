@@ -259,8 +259,9 @@ mod tests {
     use super::*;
     use crate::points::PointCloud;
 
-    /// A floor, and a thin slab's two faces 1 cm apart (a subtree of a few
-    /// surfels holds both sides): 400 surfels each, every third the floor's.
+    /// A floor, and 20 cm beside it a thin slab's two faces 1 cm apart (a
+    /// subtree of a few surfels holds both sides; a grid's cell, the floor's
+    /// edge and the slab's top): 400 surfels each, every third the floor's.
     fn floor_and_slab() -> PointCloud {
         let mut surfels = Vec::new();
         for i in 0..20 {
@@ -273,8 +274,8 @@ mod tests {
                     radiance: Vec3::ZERO,
                 };
                 surfels.push(s(Vec3::new(u, 0.0, v), Vec3::Y));
-                surfels.push(s(Vec3::new(2.0 + u, 0.0, v), -Vec3::Y));
-                surfels.push(s(Vec3::new(2.0 + u, 0.01, v), Vec3::Y));
+                surfels.push(s(Vec3::new(1.15 + u, 0.0, v), -Vec3::Y));
+                surfels.push(s(Vec3::new(1.15 + u, 0.01, v), Vec3::Y));
             }
         }
         PointCloud::new(surfels).unwrap()
