@@ -190,6 +190,9 @@ pub(super) fn build(
     let gopts = gather_options(opts, SchemeChoice::Fixed(scheme), &environment);
     let direct: Vec<Vec3> = baked.cloud.surfels().iter().map(|s| s.radiance).collect();
     let group = group_size(direct.len(), opts.surfel_gathers);
+    // The groups depend on the surfels' places and normals alone: the same
+    // for the sky and every bounce, made once.
+    let mut groups = None;
     let mut cloud = baked.cloud;
     if environment.is_some() {
         // The environment's light at the surfels, gathered with the
@@ -212,12 +215,12 @@ pub(super) fn build(
             // the dark tree, where one is built, only groups the surfels.
             let dark_tree = Groups::need_tree(group).then(|| tree(&dark, times));
             let clock = Instant::now();
-            let sky_groups = Groups::new(dark.surfels(), group, dark_tree.as_ref());
+            let sky_groups = groups.insert(Groups::new(dark.surfels(), group, dark_tree.as_ref()));
             cloud = gather_sky(
                 &dark,
                 &direct,
                 &baked.albedo,
-                &sky_groups,
+                sky_groups,
                 &gopts,
                 &SkyRays(tracer),
                 &|d, n| progress(SKY, d, n),
@@ -230,13 +233,10 @@ pub(super) fn build(
         }
     }
     let mut built = tree(&cloud, times);
-    // The groups depend on the surfels' places and normals alone, the
-    // same for every bounce.
-    let mut bounce_groups = None;
     for _ in 1..opts.bounces.max(1) {
         let clock = Instant::now();
         let rays = SkyRays(tracer);
-        let groups = bounce_groups.get_or_insert_with(|| Groups::new(cloud.surfels(), group, Some(&built)));
+        let groups = groups.get_or_insert_with(|| Groups::new(cloud.surfels(), group, Some(&built)));
         cloud = gather_bounce(
             &cloud,
             &direct,
