@@ -4,7 +4,7 @@
 //! (duplicates, sheets, lines, mixed scales, wild radii, lattices, extreme
 //! coordinates); the invariants of docs/design.md §2 hold (checked independently of
 //! `Cut::check`); the cut follows the node test (re-derived in f64) and never
-//! discards a visible disk; scaling the input by 2^k changes neither the
+//! discards a visible disk, on full and compact trees alike; scaling the input by 2^k changes neither the
 //! tree nor the cut.
 //!
 //! `PBGI_QC_TESTS` sets the number of cases per property (default 200).
@@ -17,27 +17,39 @@ use common::{
     Case, Shape, all_paths_agree, cases, first_difference, invariants, path_names, qc, reduced, semantics,
     surfels_below, traversal,
 };
+use pbgi::tree::Precision;
 use pbgi::{Cut, CutRecorder, Isa, NodeId, PointCloud, Receiver, Scheme, Tree};
 use quickcheck::{Arbitrary, Gen, TestResult};
 
 static EQUIVALENCE_RECEIVERS: AtomicU64 = AtomicU64::new(0);
 
+/// Both trees of a case's cloud: full precision and compact.
+fn trees(surfels: &[pbgi::Surfel]) -> [Tree; 2] {
+    let cloud = PointCloud::new(surfels.to_vec()).expect("generated surfels are valid");
+    [Precision::Full, Precision::Compact].map(|p| Tree::build_with(&cloud, p))
+}
+
 fn prop_equivalence(case: Case) -> TestResult {
     let surfels = case.surfels();
-    let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
     let receivers = case.receivers(&surfels);
     EQUIVALENCE_RECEIVERS.fetch_add(receivers.len() as u64, Relaxed);
-    let cuts = match all_paths_agree(&tree, &receivers, case.omega, case.light_offset, case.threshold) {
-        Ok(c) => c,
-        Err(e) => return TestResult::error(e),
-    };
-    let parents = tree.parents();
-    for (i, c) in cuts.iter().enumerate() {
-        if let Err(e) = invariants(&tree, &parents, c) {
-            return TestResult::error(format!("receiver {i} {:?}: {e}", receivers[i]));
-        }
-        if let Err(e) = c.check(&tree) {
-            return TestResult::error(format!("receiver {i} {:?}: Cut::check: {e}", receivers[i]));
+    for tree in trees(&surfels) {
+        let p = tree.precision();
+        let cuts = match all_paths_agree(&tree, &receivers, case.omega, case.light_offset, case.threshold) {
+            Ok(c) => c,
+            Err(e) => return TestResult::error(format!("{p:?} tree: {e}")),
+        };
+        let parents = tree.parents();
+        for (i, c) in cuts.iter().enumerate() {
+            if let Err(e) = invariants(&tree, &parents, c) {
+                return TestResult::error(format!("{p:?} tree, receiver {i} {:?}: {e}", receivers[i]));
+            }
+            if let Err(e) = c.check(&tree) {
+                return TestResult::error(format!(
+                    "{p:?} tree, receiver {i} {:?}: Cut::check: {e}",
+                    receivers[i]
+                ));
+            }
         }
     }
     TestResult::passed()
@@ -56,22 +68,23 @@ fn schemes_equal_scalar_on_every_path() {
 
 fn prop_semantics(case: Case) -> TestResult {
     let surfels = case.surfels();
-    let tree = Tree::build(&PointCloud::new(surfels.clone()).expect("generated surfels are valid"));
     let receivers = case.receivers(&surfels);
-    let t = traversal(&tree, case.omega, case.light_offset, case.threshold, Isa::best()).unwrap();
-    let cuts = t.cuts(Scheme::Hybrid, &receivers);
-    let (parents, below) = (tree.parents(), surfels_below(&tree));
-    for (i, (r, c)) in receivers.iter().zip(&cuts).enumerate() {
-        if let Err(e) = semantics(
-            &tree,
-            &parents,
-            &below,
-            &surfels,
-            r,
-            (case.omega, case.light_offset),
-            c,
-        ) {
-            return TestResult::error(format!("receiver {i} {r:?}: {e}"));
+    for tree in trees(&surfels) {
+        let t = traversal(&tree, case.omega, case.light_offset, case.threshold, Isa::best()).unwrap();
+        let cuts = t.cuts(Scheme::Hybrid, &receivers);
+        let (parents, below) = (tree.parents(), surfels_below(&tree));
+        for (i, (r, c)) in receivers.iter().zip(&cuts).enumerate() {
+            if let Err(e) = semantics(
+                &tree,
+                &parents,
+                &below,
+                &surfels,
+                r,
+                (case.omega, case.light_offset),
+                c,
+            ) {
+                return TestResult::error(format!("{:?} tree, receiver {i} {r:?}: {e}", tree.precision()));
+            }
         }
     }
     TestResult::passed()
@@ -219,6 +232,7 @@ fn prop_scale(input: Scaled) -> TestResult {
             area: a.area * s * s,
             centroid: a.centroid * s,
             light_centroid: a.light_centroid * s,
+            light_offset: a.light_offset * s,
             ..a
         };
         if b != want {

@@ -10,8 +10,8 @@ use crate::common;
 
 use common::{TreeCase, parents_from_nodes, path_names, qc, reduced, surfels_below};
 use glam::{DVec3, Vec3};
-use pbgi::tree::{EXTRA_DEPTH, MAX_DEPTH};
-use pbgi::{NodeId, PointCloud, Surfel, Tree};
+use pbgi::tree::{EXTRA_DEPTH, MAX_DEPTH, Precision};
+use pbgi::{NodeId, PointCloud, Surfel, Tree, TreeFile};
 use quickcheck::TestResult;
 
 fn ceil_log2(n: usize) -> usize {
@@ -93,19 +93,11 @@ fn check_tree(surfels: &[Surfel], tree: &Tree) -> Result<(), String> {
         {
             return Err(format!("node {k}: accessors disagree with node()"));
         }
-        let (c, big_r) = (v.center.as_dvec3(), v.radius as f64);
         let (mut area, mut normal, mut radiance) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for &i in list {
             let s = &surfels[i as usize];
-            let (p, r) = (s.position.as_dvec3(), s.radius as f64);
-            // The sphere holds the whole ball around each disk (so the disk too).
-            let reach = (p - c).length() + r;
-            if reach > big_r {
-                return Err(format!(
-                    "node {k}: surfel {i} reaches {reach:e} from the centre, radius {big_r:e}"
-                ));
-            }
+            let r = s.radius as f64;
             let a = std::f64::consts::PI * r * r;
             area += a;
             normal += s.normal.as_dvec3() * a;
@@ -131,9 +123,32 @@ fn check_tree(surfels: &[Surfel], tree: &Tree) -> Result<(), String> {
                 v.normal, v.radiance
             ));
         }
-        // The normal cone holds every normal below (rounded outwards).
+    }
+    check_bounds(surfels, tree)
+}
+
+/// Every node's sphere holds the disks below it, and its normal cone their
+/// normals (rounded outwards), as a render reads them.
+fn check_bounds(surfels: &[Surfel], tree: &Tree) -> Result<(), String> {
+    let below = surfels_below(tree);
+    for k in 0..tree.len() as NodeId {
+        let v = tree.node(k);
+        let (c, big_r) = (v.center.as_dvec3(), v.radius as f64);
+        for &i in &below[k as usize] {
+            let s = &surfels[i as usize];
+            // The sphere holds the whole ball around each disk (so the disk too).
+            let reach = (s.position.as_dvec3() - c).length() + s.radius as f64;
+            if reach > big_r {
+                return Err(format!(
+                    "node {k}: surfel {i} reaches {reach:e} from the centre, radius {big_r:e}"
+                ));
+            }
+        }
+        // The node test's bound holds for a cone whose cosine is at most
+        // each normal's cosine to the axis and whose sine is at least each
+        // normal's sine (a wide cone, cosine 0 and sine 1, never culls).
         let (cos, sin) = (v.cone_cos as f64, v.cone_sin as f64);
-        if !(0.0..=1.0).contains(&cos) || !(0.0..=1.0).contains(&sin) || cos * cos + sin * sin < 1.0 - 1e-6 {
+        if !(0.0..=1.0).contains(&cos) || !(0.0..=1.0).contains(&sin) || (cos == 0.0 && sin < 1.0) {
             return Err(format!("node {k}: cone cos {cos} sin {sin}"));
         }
         if cos > 0.0 {
@@ -141,12 +156,12 @@ fn check_tree(surfels: &[Surfel], tree: &Tree) -> Result<(), String> {
             if (a.length() - 1.0).abs() > 1e-5 {
                 return Err(format!("node {k}: cone axis {a} is not unit"));
             }
-            for &i in list {
+            for &i in &below[k as usize] {
                 let m = surfels[i as usize].normal.as_dvec3();
                 let c = a.dot(m) / (a.length() * m.length());
-                if c < cos {
+                if c < cos || (1.0 - c * c).max(0.0).sqrt() > sin {
                     return Err(format!(
-                        "node {k}: normal of surfel {i} at cos {c} from the axis, cone cos {cos}"
+                        "node {k}: normal of surfel {i} at cos {c} from the axis, cone cos {cos} sin {sin}"
                     ));
                 }
             }
@@ -176,6 +191,100 @@ fn prop_tree(case: TreeCase) -> TestResult {
 #[test]
 fn tree_properties_on_random_clouds() {
     qc("tree properties", prop_tree as fn(TreeCase) -> TestResult);
+}
+
+/// The compact tree against the full tree, node by node: its spheres and
+/// cones still bound the surfels below and are barely larger, each payload
+/// value is within half a quantization step of the full one (plus the
+/// decoding's `f32` rounding), the links and areas are unchanged, and a file
+/// reads back the decoded values.
+fn prop_compact(case: TreeCase) -> TestResult {
+    let surfels = common::cloud(&case.0);
+    let cloud = PointCloud::new(surfels.clone()).expect("generated surfels are valid");
+    let full = Tree::build(&cloud);
+    let compact = Tree::build_with(&cloud, Precision::Compact);
+    if compact.precision() != Precision::Compact || compact.len() != full.len() {
+        return TestResult::error("not compact");
+    }
+    // Bounds stay bounds, on the decoded values.
+    if let Err(e) = check_bounds(&surfels, &compact) {
+        return TestResult::error(format!("compact: {e}"));
+    }
+    // Tight: a sphere grows by at most its centre's and its radius's steps
+    // (`(√3/2)/32767 + 1/16384` of its parent's radius, and its centre's
+    // `f32` rounding), a cone by the axis's step and the cosine's.
+    let parents = full.parents();
+    let half = 0.5 / 32767.0;
+    for k in 0..full.len() as NodeId {
+        let (a, b) = (full.node(k), compact.node(k));
+        // The steps are of the parent's decoded radius, however much larger
+        // than the node it is (an outlier's sibling); the root's of its own.
+        let parent = parents[k as usize].map_or(a.radius as f64, |p| compact.node(p).radius as f64);
+        let angle = |c: f32| (c as f64).clamp(-1.0, 1.0).acos();
+        let round = 4.0 * f32::EPSILON as f64 * (b.center.abs().max_element() + b.radius) as f64;
+        let off = |x: Vec3, y: Vec3| (x.as_dvec3() - y.as_dvec3()).abs().max_element();
+        let step = half * b.radius as f64 + round;
+        let top = a.radiance.max_element() as f64;
+        let problem = if (a.area, a.children, a.surfel) != (b.area, b.children, b.surfel) {
+            Some("the area or the links changed".to_string())
+        } else if b.radius as f64 > a.radius as f64 * (1.0 + 1e-6) + 1e-4 * parent + round {
+            Some(format!(
+                "radius {} for {} (parent {parent}), centre {} for {}, parent {:?}",
+                b.radius,
+                a.radius,
+                b.center,
+                a.center,
+                parents[k as usize].map(|p| compact.sphere(p))
+            ))
+        } else if a.cone_cos > 0.0 && angle(b.cone_cos) > angle(a.cone_cos) + 0.01 {
+            Some(format!("cone cos {} for {}", b.cone_cos, a.cone_cos))
+        } else if off(a.centroid, b.centroid) > step || off(a.light_centroid, b.light_centroid) > step {
+            Some(format!(
+                "centroids {} {} against {} {}",
+                b.centroid, b.light_centroid, a.centroid, a.light_centroid
+            ))
+        } else if !(b.light_offset >= b.light_centroid.distance(b.centroid)
+            && b.light_offset as f64
+                <= b.light_centroid.distance(b.centroid) as f64 + b.radius as f64 / 16384.0 + round)
+        {
+            Some(format!(
+                "light offset {} for centroids {} apart",
+                b.light_offset,
+                b.light_centroid.distance(b.centroid)
+            ))
+        } else if off(a.normal, b.normal) > half + 1e-7 {
+            Some(format!("normal {} against {}", b.normal, a.normal))
+        } else if off(a.radiance, b.radiance) > top / 65535.0 * (1.0 + 1e-6) || b.radiance.min_element() < 0.0
+        {
+            Some(format!("radiance {} against {}", b.radiance, a.radiance))
+        } else {
+            None
+        };
+        if let Some(p) = problem {
+            return TestResult::error(format!("node {k}: {p}"));
+        }
+    }
+    // A file holds the decoded values, and reads back to them (the light
+    // offset, which a file does not hold, is the centroids' distance again).
+    let file = TreeFile::new(cloud, compact.clone(), Default::default()).expect("a built tree");
+    let back = TreeFile::from_bytes(&file.to_bytes()).expect("the file reads back");
+    let stored = |t: &Tree, k| pbgi::NodeView {
+        light_offset: 0.0,
+        ..t.node(k)
+    };
+    match (0..full.len() as NodeId).find(|&k| stored(back.tree(), k) != stored(&compact, k)) {
+        Some(k) => TestResult::error(format!(
+            "node {k}: {:?} read back, {:?} written",
+            back.tree().node(k),
+            compact.node(k)
+        )),
+        None => TestResult::passed(),
+    }
+}
+
+#[test]
+fn compact_tree_bounds_hold_and_values_within_half_a_step() {
+    qc("compact tree", prop_compact as fn(TreeCase) -> TestResult);
 }
 
 #[test]

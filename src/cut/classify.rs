@@ -5,7 +5,6 @@
 //! node identically.
 
 use crate::simd::{F32s, Real};
-use crate::tree::{NodeArrays, field};
 
 /// The node fields the test reads, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -178,24 +177,5 @@ pub(crate) fn outcome_scalar(
         Outcome::Splat
     } else {
         Outcome::Traverse
-    }
-}
-
-/// Loads node `k` for the scalar test (or to splat over the lanes).
-#[inline(always)]
-pub(crate) fn load_node(a: &NodeArrays, k: u32) -> NodeLanes<f32> {
-    let (p, s) = NodeArrays::locate(k);
-    let f = &a.pairs[p].f;
-    NodeLanes {
-        cx: f[field::CX][s],
-        cy: f[field::CY][s],
-        cz: f[field::CZ][s],
-        r: f[field::R][s],
-        ax: f[field::AX][s],
-        ay: f[field::AY][s],
-        az: f[field::AZ][s],
-        cos: f[field::COS][s],
-        sin: f[field::SIN][s],
-        light_offset: f[field::LIGHT_OFFSET][s],
     }
 }

@@ -9,6 +9,7 @@
 //! the first sparse entry comes early, so it degenerates to single (box of
 //! 10⁵ surfels, 4096 receivers, AVX2: 41–49 ms against 23–24 ms per entry).
 
+use super::nodes::Pairs;
 use super::single::{self, PairStack};
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 use crate::simd::set_bits;
@@ -16,8 +17,9 @@ use crate::simd::set_bits;
 /// Finishes the subtree of `node` for each lane of `mask` with single traversal.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn finish<S: CutSink>(
+pub(crate) fn finish<S: CutSink, N: Pairs + ?Sized>(
     t: &Traversal,
+    a: &N,
     receivers: &[Receiver],
     base: usize,
     node: u32,
@@ -30,6 +32,6 @@ pub(crate) fn finish<S: CutSink>(
     for l in set_bits(mask) {
         scratch.clear();
         scratch.push_node(node);
-        single::traverse(t, &receivers[l].lanes(), base + l, scratch, sink, stats);
+        single::traverse(t, a, &receivers[l].lanes(), base + l, scratch, sink, stats);
     }
 }

@@ -15,6 +15,7 @@
 
 pub mod classify;
 pub mod hybrid;
+mod nodes;
 mod options;
 pub mod packet;
 mod receiver;

@@ -2,8 +2,9 @@
 //! shared stack whose entries carry the mask of lanes still traversing (the
 //! paper's node queue and mask queue).
 
-use super::classify::{ReceiverLanes, classify, load_node};
+use super::classify::{ReceiverLanes, classify};
 use super::hybrid;
+use super::nodes::Pairs;
 use super::single::PairStack;
 use super::{CutSink, Receiver, Traversal, TraversalStats};
 use crate::simd::{F32s, LANES, lane_mask, set_bits};
@@ -42,16 +43,16 @@ pub(crate) fn load_receivers(receivers: &[Receiver]) -> ReceiverLanes<F32s> {
 /// sink). With `HYBRID`, an entry with fewer than `t.hybrid_threshold` active
 /// lanes is handed to [`hybrid::finish`] instead.
 #[inline(always)]
-pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
+pub(crate) fn traverse<S: CutSink, N: Pairs + ?Sized, const HYBRID: bool>(
     t: &Traversal,
+    a: &N,
     receivers: &[Receiver],
     base: usize,
     scratch: &mut PairStack,
     sink: &mut S,
     stats: &mut TraversalStats,
 ) {
-    let a = &t.tree.nodes;
-    if a.pairs.is_empty() {
+    if a.count() == 0 {
         return;
     }
     let recs = load_receivers(receivers);
@@ -66,15 +67,15 @@ pub(crate) fn traverse<S: CutSink, const HYBRID: bool>(
         let (k, mask) = (nodes[sp], masks[sp]);
         let active = mask.count_ones();
         if HYBRID && active < t.hybrid_threshold {
-            hybrid::finish(t, receivers, base, k, mask, scratch, sink, stats);
+            hybrid::finish(t, a, receivers, base, k, mask, scratch, sink, stats);
             continue;
         }
         stats.node_tests += active as u64;
         stats.active_lanes += active as u64;
         stats.lane_slots += LANES as u64;
 
-        let node = load_node(a, k).splat();
-        let child = a.child(k);
+        let (node, child) = a.node(k);
+        let node = node.splat();
         let (discard, far) = classify(&node, &recs, &test);
         let discard = discard.to_bitmask() as u16 & mask;
         let kept = mask & !discard;

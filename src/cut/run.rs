@@ -1,9 +1,11 @@
 //! The traversal kernel: all receivers of a call through one scheme, the
 //! body each instruction-set clone compiles (`simd::dispatch`).
 
+use super::nodes::Pairs;
 use super::{CutSink, Receiver, Scheme, Traversal, TraversalStats, packet, scalar, single};
 use crate::simd::LANES;
 use crate::simd::dispatch::Kernel;
+use crate::tree::NodeArrays;
 
 /// The traversal kernel: `scheme` over all receivers into `sink`.
 pub(super) struct Run<'a, 't, S> {
@@ -31,31 +33,47 @@ impl<S: CutSink> Kernel for Run<'_, '_, S> {
         if t.tree.is_empty() {
             return stats;
         }
-        let mut scratch = single::PairStack::default();
-        match scheme {
-            Scheme::Scalar => {
-                for (i, r) in receivers.iter().enumerate() {
-                    stats.node_tests += scalar::traverse(t, &r.lanes(), i, sink);
-                }
-            }
-            Scheme::Single => {
-                for (i, r) in receivers.iter().enumerate() {
-                    scratch.clear();
-                    scratch.push_node(0);
-                    single::traverse(t, &r.lanes(), i, &mut scratch, sink, &mut stats);
-                }
-            }
-            Scheme::Packet => {
-                for (c, chunk) in receivers.chunks(LANES).enumerate() {
-                    packet::traverse::<S, false>(t, chunk, c * LANES, &mut scratch, sink, &mut stats);
-                }
-            }
-            Scheme::Hybrid => {
-                for (c, chunk) in receivers.chunks(LANES).enumerate() {
-                    packet::traverse::<S, true>(t, chunk, c * LANES, &mut scratch, sink, &mut stats);
-                }
-            }
+        match &t.tree.nodes {
+            NodeArrays::Full(pairs) => run_on(t, pairs.as_slice(), scheme, receivers, sink, &mut stats),
+            NodeArrays::Compact(pairs) => run_on(t, pairs.as_slice(), scheme, receivers, sink, &mut stats),
         }
         stats
+    }
+}
+
+/// `scheme` over all receivers, on the pair records `a`.
+#[inline(always)]
+fn run_on<S: CutSink, N: Pairs + ?Sized>(
+    t: &Traversal,
+    a: &N,
+    scheme: Scheme,
+    receivers: &[Receiver],
+    sink: &mut S,
+    stats: &mut TraversalStats,
+) {
+    let mut scratch = single::PairStack::default();
+    match scheme {
+        Scheme::Scalar => {
+            for (i, r) in receivers.iter().enumerate() {
+                stats.node_tests += scalar::traverse(t, a, &r.lanes(), i, sink);
+            }
+        }
+        Scheme::Single => {
+            for (i, r) in receivers.iter().enumerate() {
+                scratch.clear();
+                scratch.push_node(0);
+                single::traverse(t, a, &r.lanes(), i, &mut scratch, sink, stats);
+            }
+        }
+        Scheme::Packet => {
+            for (c, chunk) in receivers.chunks(LANES).enumerate() {
+                packet::traverse::<S, N, false>(t, a, chunk, c * LANES, &mut scratch, sink, stats);
+            }
+        }
+        Scheme::Hybrid => {
+            for (c, chunk) in receivers.chunks(LANES).enumerate() {
+                packet::traverse::<S, N, true>(t, a, chunk, c * LANES, &mut scratch, sink, stats);
+            }
+        }
     }
 }

@@ -2,20 +2,21 @@
 //! fixed-size stack, the node test short-circuited. Every speed-up is measured
 //! against this, so it is kept as fast as plain scalar code gets.
 
-use super::classify::{Outcome, ReceiverLanes, load_node, outcome_scalar};
+use super::classify::{Outcome, ReceiverLanes, outcome_scalar};
+use super::nodes::Pairs;
 use super::{CutSink, Traversal};
 use crate::tree::{LEAF_BIT, MAX_DEPTH, NodeArrays};
 
 /// Traverses for one receiver; returns the number of nodes tested.
 #[inline(always)]
-pub(crate) fn traverse<S: CutSink>(
+pub(crate) fn traverse<S: CutSink, N: Pairs + ?Sized>(
     t: &Traversal,
+    a: &N,
     rec: &ReceiverLanes<f32>,
     index: usize,
     sink: &mut S,
 ) -> u64 {
-    let a = &t.tree.nodes;
-    if a.pairs.is_empty() {
+    if a.count() == 0 {
         return 0;
     }
     // Depth first, both children pushed: at most depth + 1 entries.
@@ -26,8 +27,7 @@ pub(crate) fn traverse<S: CutSink>(
         sp -= 1;
         let k = stack[sp];
         tests += 1;
-        let node = load_node(a, k);
-        let child = a.child(k);
+        let (node, child) = a.node(k);
         match outcome_scalar(&node, rec, &t.far(), child & LEAF_BIT != 0) {
             Outcome::Discard => {
                 if S::DISCARDS {

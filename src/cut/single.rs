@@ -10,13 +10,11 @@
 
 use std::simd::{Select, prelude::*};
 
-use super::classify::{NodeLanes, ReceiverLanes, classify};
+use super::classify::{ReceiverLanes, classify};
+use super::nodes::{PAIRS, Pairs};
 use super::{CutSink, Traversal, TraversalStats};
 use crate::simd::{F32s, LANES, lane_mask, set_bits};
-use crate::tree::{LEAF_BIT, NodeArrays, PairRecord, field};
-
-/// Entries per step.
-const PAIRS: usize = LANES / 2;
+use crate::tree::{LEAF_BIT, NodeArrays};
 
 /// Entry flag: slot 0 of the pair is not to be tested.
 const SKIP_SLOT0: u32 = 1 << 30;
@@ -69,28 +67,6 @@ impl PairStack {
     }
 }
 
-/// Field `j` of the popped pair records into lanes `2i, 2i + 1`.
-#[inline(always)]
-fn load_field(pairs: &[&PairRecord; PAIRS], j: usize) -> F32s {
-    F32s::from_array(std::array::from_fn(|l| pairs[l / 2].f[j][l & 1]))
-}
-
-#[inline(always)]
-fn load_pair_nodes(pairs: &[&PairRecord; PAIRS]) -> NodeLanes<F32s> {
-    NodeLanes {
-        cx: load_field(pairs, field::CX),
-        cy: load_field(pairs, field::CY),
-        cz: load_field(pairs, field::CZ),
-        r: load_field(pairs, field::R),
-        ax: load_field(pairs, field::AX),
-        ay: load_field(pairs, field::AY),
-        az: load_field(pairs, field::AZ),
-        cos: load_field(pairs, field::COS),
-        sin: load_field(pairs, field::SIN),
-        light_offset: load_field(pairs, field::LIGHT_OFFSET),
-    }
-}
-
 /// Spreads the 8 low bits of `x` to the even bits of the result.
 #[inline(always)]
 fn spread(x: u16) -> u16 {
@@ -101,8 +77,9 @@ fn spread(x: u16) -> u16 {
 
 /// Traverses the entries on `stack` for one receiver until it is empty.
 #[inline(always)]
-pub(crate) fn traverse<S: CutSink>(
+pub(crate) fn traverse<S: CutSink, N: Pairs + ?Sized>(
     t: &Traversal,
+    a: &N,
     rec: &ReceiverLanes<f32>,
     index: usize,
     stack: &mut PairStack,
@@ -114,24 +91,24 @@ pub(crate) fn traverse<S: CutSink>(
         // Seeds (possibly flagged) sit at the bottom: only steps that reach
         // them pay for the flags.
         if stack.len - stack.len.min(PAIRS) < stack.seeds {
-            step::<S, true>(t, &rec, index, stack, sink, stats);
+            step::<S, N, true>(t, a, &rec, index, stack, sink, stats);
         } else {
-            step::<S, false>(t, &rec, index, stack, sink, stats);
+            step::<S, N, false>(t, a, &rec, index, stack, sink, stats);
         }
     }
 }
 
 /// One step: pops up to 8 entries, tests their nodes, reports, pushes.
 #[inline(always)]
-fn step<S: CutSink, const FLAGS: bool>(
+fn step<S: CutSink, N: Pairs + ?Sized, const FLAGS: bool>(
     t: &Traversal,
+    a: &N,
     rec: &ReceiverLanes<F32s>,
     index: usize,
     stack: &mut PairStack,
     sink: &mut S,
     stats: &mut TraversalStats,
 ) {
-    let a = &t.tree.nodes;
     stack.reserve_step();
     let count = stack.len.min(PAIRS);
     let start = stack.len - count;
@@ -156,7 +133,7 @@ fn step<S: CutSink, const FLAGS: bool>(
         stack.buf[start..start + PAIRS].fill(0);
     }
     debug_assert!(
-        entries.iter().all(|&e| (e as usize) < a.pairs.len()),
+        entries.iter().all(|&e| (e as usize) < a.count()),
         "entries {entries:x?} start {start} count {count} seeds {} flags {FLAGS} buf {:x?}",
         stack.seeds,
         &stack.buf[..(start + 24).min(stack.buf.len())]
@@ -166,12 +143,7 @@ fn step<S: CutSink, const FLAGS: bool>(
     // root's record), all in range: `Tree::build` makes them so, and a tree
     // read from a file is refused unless its links are laid out the same
     // (`tree::file`, `check_structure`).
-    let pairs: [&PairRecord; PAIRS] =
-        std::array::from_fn(|i| unsafe { a.pairs.get_unchecked(entries[i] as usize) });
-    let node = load_pair_nodes(&pairs);
-    let child = Simd::from_array(std::array::from_fn::<u32, LANES, _>(|l| {
-        pairs[l / 2].child[l & 1]
-    }));
+    let (node, child) = unsafe { a.lanes(&entries) };
     let (discard, far) = classify(&node, rec, &t.far().splat());
     let leaf = (child & Simd::splat(LEAF_BIT)).simd_ne(Simd::splat(0));
 

@@ -204,8 +204,8 @@ impl MicroBuffer {
         let Some((rec, light)) = NodeLight::of(tree, node) else {
             return;
         };
-        if let Some(l) = self.locate(rec, &light) {
-            self.apply(rec, node, &l);
+        if let Some(l) = self.locate(&rec, &light) {
+            self.apply(&rec, node, &l);
         }
     }
 

@@ -451,9 +451,12 @@ pub(crate) fn compose(
 /// cluster's brightest facet.
 #[inline(always)]
 fn brightest_of(tree: &Tree, node: u32) -> Vec3 {
-    let k = node as usize;
-    let mut b = tree.radiance_slice().get(k).copied().unwrap_or(Vec3::ZERO);
-    if let Some(f) = tree.facets_of.get(k).and_then(|&i| tree.cluster.get(i as usize)) {
+    let mut b = if (node as usize) < tree.len() {
+        tree.radiance(node)
+    } else {
+        Vec3::ZERO
+    };
+    if let Some(f) = tree.cluster_of(node) {
         for g in &f.facet {
             b = b.max(Vec3::new(g[3], g[4], g[5]));
         }

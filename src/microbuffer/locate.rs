@@ -92,19 +92,14 @@ impl NodeLight<'static> {
 impl<'a> NodeLight<'a> {
     /// Node `node` of `tree` (`None` if it is not one).
     #[inline(always)]
-    pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(&'a SplatRecord, Self)> {
-        let k = node as usize;
-        let rec = tree.splat.get(k)?;
-        let cluster = if rec.kind == MIXED {
-            &tree.cluster[tree.facets_of[k] as usize]
-        } else {
-            &Cluster::NONE
-        };
+    pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(SplatRecord, Self)> {
+        let rec = tree.splat_record(node)?;
+        let cluster = tree.cluster_of(node).unwrap_or(&Cluster::NONE);
         Some((
             rec,
             NodeLight {
                 kind: rec.kind,
-                radiance: tree.radiance_slice()[k],
+                radiance: tree.radiance(node),
                 cluster,
                 rise: rec.rise,
                 lift: rec.lift,

@@ -99,10 +99,7 @@ pub(crate) type Facets = [f32; FACETS * FACET];
 /// flat (else it is one round cone at its centre, `±R` deep).
 #[inline(always)]
 pub(crate) fn facets(tree: &Tree, node: NodeId, position: Vec3, frame: &[Vec3; 3]) -> Option<Facets> {
-    if tree.splat[node as usize].kind != MIXED {
-        return None;
-    }
-    let planes = &tree.planes[tree.facets_of[node as usize] as usize];
+    let planes = tree.planes_of(node)?;
     if !planes.flat {
         return None;
     }
@@ -146,7 +143,7 @@ impl Shape {
         half_sample: f32,
         facets: u32,
     ) -> Shape {
-        let rec = &tree.splat[node as usize];
+        let rec = tree.splat_record(node).expect("a splatted node");
         let r = tree.bounding_radius(node);
         let local = |x: Vec3| Vec3::new(x.dot(frame[0]), x.dot(frame[1]), x.dot(frame[2]));
         let v = local(Vec3::from_array(rec.centroid) - position);

@@ -286,8 +286,8 @@ fn cuts_body(
             let Some((rec, light)) = NodeLight::of(tree, node) else {
                 continue; // not a node of `tree`
             };
-            if let Some(l) = mb.locate(rec, &light) {
-                mb.apply(rec, node, &l);
+            if let Some(l) = mb.locate(&rec, &light) {
+                mb.apply(&rec, node, &l);
             }
         }
         *o = convolve(mb, tree, what, near);
@@ -310,9 +310,9 @@ fn packet_body(
             for &node in &cut.nodes {
                 if cut.lanes[node as usize] >> i & 1 != 0
                     && let Some((rec, light)) = NodeLight::of(tree, node)
-                    && let Some(l) = mb.locate(rec, &light)
+                    && let Some(l) = mb.locate(&rec, &light)
                 {
-                    mb.apply(rec, node, &l);
+                    mb.apply(&rec, node, &l);
                 }
             }
             *o = convolve(mb, tree, what, near);
@@ -328,7 +328,7 @@ fn packet_body(
         let Some((rec, light)) = NodeLight::of(tree, node) else {
             continue; // not a node of `tree`
         };
-        let s = NodeSplat::of(rec).splat();
+        let s = NodeSplat::of(&rec).splat();
         let l = locate(&s, &light, &frames, half);
         let show = l.valid.to_bitmask() as u16 & lanes;
         if show == 0 {

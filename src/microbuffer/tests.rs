@@ -267,7 +267,7 @@ fn a_corner_cluster_shows_only_the_facets_facing_the_receiver() {
     let at = Vec3::new(-3.0, 4.0, 0.5);
     let mut mb = MicroBuffer::new(8).unwrap();
     mb.reset(at, (Vec3::new(0.5, 0.0, 0.5) - at).normalize());
-    let l = mb.locate(rec, &light).expect("the floor faces the receiver");
+    let l = mb.locate(&rec, &light).expect("the floor faces the receiver");
     let c = Vec3::from_array(rec.centroid);
     let (d, u) = ((at - c).length(), (at - c).normalize());
     let floor: Vec<&Surfel> = surfels.iter().filter(|s| s.normal == Vec3::Y).collect();

@@ -181,7 +181,7 @@ pub(super) fn build(
     let tree = |cloud: &PointCloud, times: &mut PreTimings| {
         let clock = Instant::now();
         progress(TREE, 0, 1);
-        let tree = Tree::build(cloud);
+        let tree = Tree::build_with(cloud, opts.tree_precision);
         progress(TREE, 1, 1);
         times.tree += clock.elapsed().as_secs_f64();
         tree

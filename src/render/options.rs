@@ -3,6 +3,7 @@
 use crate::cut::{CutOptions, SchemeChoice};
 use crate::error::Error;
 use crate::scene::Scene;
+use crate::tree::Precision;
 
 /// The surfel budget `pbgi render` gives a scene file when neither
 /// `--surfels` nor `--density` is given: about what the built-in Cornell box
@@ -223,6 +224,9 @@ pub struct RenderOptions {
     /// the scene's area at any budget (more on curved parts, whose groups
     /// stay flat). `0`: groups of 8 however many surfels.
     pub surfel_gathers: u32,
+    /// How the trees store what splatting reads of their nodes: whole, or
+    /// quantized against each node's bounding sphere.
+    pub tree_precision: Precision,
     /// Which light the image holds.
     pub component: Component,
     /// Seed of every random choice.
@@ -389,6 +393,7 @@ impl Default for RenderOptions {
             surfel_budget: None,
             surfel_light_samples: 16,
             surfel_gathers: DEFAULT_SURFEL_GATHERS,
+            tree_precision: Precision::Full,
             component: Component::All,
             seed: 1,
             crop: None,

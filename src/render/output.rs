@@ -70,6 +70,8 @@ pub struct RenderOutput {
     pub isa: Isa,
     /// Surfels in the cloud (0 when none was needed).
     pub surfels: usize,
+    /// Bytes the tree holds per surfel ([`Tree::bytes_per_surfel`](crate::Tree::bytes_per_surfel)).
+    pub tree_bytes_per_surfel: f64,
     /// Receivers shaded.
     pub receivers: usize,
     /// Of them, records of the world-space cache gathered for this frame

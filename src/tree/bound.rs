@@ -5,8 +5,34 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{BuildNode, Cluster, FACETS, SplatRecord};
+use super::quantize::Quantized;
+use super::{Cluster, FACETS, SplatRecord};
 use crate::points::Surfel;
+
+/// A node as the builder makes it, before it is written into the arrays.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BuildNode {
+    pub center: [f32; 3],
+    pub centroid: [f32; 3],
+    pub light_centroid: [f32; 3],
+    pub radius: f32,
+    pub axis: [f32; 3],
+    pub cos: f32,
+    pub sin: f32,
+    /// A leaf's `LEAF_BIT | surfel`, an inner node's left child.
+    pub child: u32,
+    pub area: f32,
+    pub normal: Vec3,
+    pub radiance: Vec3,
+    pub facets: u32,
+    /// The facets, where there are several.
+    pub cluster: Option<Box<Cluster>>,
+    pub depth: u32,
+    /// The steps of a compact tree's node (the fields above are their
+    /// decoded values), and the sphere they are steps of.
+    pub steps: Quantized,
+    pub base: [f32; 4],
+}
 
 /// A surfel joins the facet whose first normal is nearest if within this
 /// cosine (about 18°), else starts a facet while there are fewer than three.
@@ -143,11 +169,13 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
             cluster
         }),
         depth: 0,
+        steps: Default::default(),
+        base: [0.0; 4],
     }
 }
 
 /// Smallest f32 ≥ `x`.
-fn round_up(x: f64) -> f32 {
+pub(super) fn round_up(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) < x { f.next_up() } else { f }
 }

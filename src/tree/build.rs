@@ -4,28 +4,220 @@
 
 use glam::Vec3;
 
-use super::{BuildNode, LEAF_BIT, bound};
+use super::bound::BuildNode;
+use super::payload::PackedSplat;
+use super::quantize::{self, CompactPair};
+use super::{
+    Cluster, LEAF, LEAF_BIT, MIXED, NodeArrays, PLANAR, PairRecord, Payload, SplatRecord, bound, field,
+};
 use crate::points::Surfel;
+
+/// What a node's test fields are quantized against.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Base {
+    /// Nothing: full precision.
+    Full,
+    /// Its own sphere (the root of a compact tree).
+    Root,
+    /// Its parent's decoded sphere.
+    Parent([f32; 4]),
+}
+
+/// Where the build writes a run of nodes, from its first: their pair
+/// records (siblings share one), and per node its payload and its facets.
+/// A subtree's descendants are one such run, split between its children's
+/// subtrees as the build recurses, so the arrays are written in place.
+pub(super) struct Out<'a> {
+    pairs: PairsOut<'a>,
+    payload: PayloadOut<'a>,
+    cluster: &'a mut [Option<Box<Cluster>>],
+}
+
+enum PairsOut<'a> {
+    Full(&'a mut [PairRecord]),
+    Compact(&'a mut [CompactPair]),
+}
+
+enum PayloadOut<'a> {
+    Full(&'a mut [SplatRecord], &'a mut [Vec3]),
+    Compact(&'a mut [PackedSplat]),
+}
+
+impl<'a> Out<'a> {
+    pub fn new(
+        nodes: &'a mut NodeArrays,
+        payload: &'a mut Payload,
+        cluster: &'a mut [Option<Box<Cluster>>],
+    ) -> Self {
+        let pairs = match nodes {
+            NodeArrays::Full(p) => PairsOut::Full(p),
+            NodeArrays::Compact(p) => PairsOut::Compact(p),
+        };
+        let payload = match payload {
+            Payload::Full { splat, radiance } => PayloadOut::Full(splat, radiance),
+            Payload::Compact(packed) => PayloadOut::Compact(packed),
+        };
+        Out {
+            pairs,
+            payload,
+            cluster,
+        }
+    }
+
+    /// The first `nodes` nodes (an even number, or the root alone) and the rest.
+    pub fn split(self, nodes: usize) -> (Out<'a>, Out<'a>) {
+        let at = nodes.div_ceil(2);
+        let (p0, p1) = match self.pairs {
+            PairsOut::Full(p) => {
+                let (a, b) = p.split_at_mut(at);
+                (PairsOut::Full(a), PairsOut::Full(b))
+            }
+            PairsOut::Compact(p) => {
+                let (a, b) = p.split_at_mut(at);
+                (PairsOut::Compact(a), PairsOut::Compact(b))
+            }
+        };
+        let (c0, c1) = self.cluster.split_at_mut(nodes);
+        let (l0, l1) = match self.payload {
+            PayloadOut::Full(s, r) => {
+                let ((s0, s1), (r0, r1)) = (s.split_at_mut(nodes), r.split_at_mut(nodes));
+                (PayloadOut::Full(s0, r0), PayloadOut::Full(s1, r1))
+            }
+            PayloadOut::Compact(c) => {
+                let (a, b) = c.split_at_mut(nodes);
+                (PayloadOut::Compact(a), PayloadOut::Compact(b))
+            }
+        };
+        (
+            Out {
+                pairs: p0,
+                payload: l0,
+                cluster: c0,
+            },
+            Out {
+                pairs: p1,
+                payload: l1,
+                cluster: c1,
+            },
+        )
+    }
+
+    /// Sets the base of the run's pair `i / 2` (a compact tree's: the
+    /// decoded sphere of the pair's parent).
+    pub fn set_base(&mut self, i: usize, base: [f32; 4]) {
+        if let PairsOut::Compact(p) = &mut self.pairs {
+            p[i / 2].base = base;
+        }
+    }
+
+    /// Writes `b` as the run's node `i`, in slot `slot` of its pair `i / 2`.
+    pub fn write(&mut self, i: usize, slot: usize, b: BuildNode) {
+        let leaf = b.child & LEAF_BIT != 0;
+        // Children are stored by pair record: the left child `c` is odd.
+        let child = if leaf { b.child } else { b.child.div_ceil(2) };
+        match &mut self.pairs {
+            PairsOut::Full(p) => {
+                let pair = &mut p[i / 2];
+                let values = [
+                    b.center[0],
+                    b.center[1],
+                    b.center[2],
+                    b.radius,
+                    b.axis[0],
+                    b.axis[1],
+                    b.axis[2],
+                    b.cos,
+                    b.sin,
+                ];
+                debug_assert_eq!(field::STORED, values.len());
+                for (j, v) in values.into_iter().enumerate() {
+                    pair.f[j][slot] = v;
+                }
+                pair.child[slot] = child;
+            }
+            PairsOut::Compact(p) => p[i / 2].set(slot, &b.steps, child),
+        }
+        let kind = if leaf {
+            LEAF
+        } else if b.facets <= 1 {
+            PLANAR
+        } else {
+            MIXED
+        };
+        let rec = SplatRecord {
+            centroid: b.centroid,
+            light_centroid: b.light_centroid,
+            area: b.area,
+            normal: b.normal.to_array(),
+            kind,
+            ..SplatRecord::default()
+        };
+        match &mut self.payload {
+            PayloadOut::Full(s, r) => {
+                s[i] = rec;
+                r[i] = b.radiance;
+            }
+            PayloadOut::Compact(c) => {
+                let facets = b.cluster.as_deref().unwrap_or(&Cluster::NONE);
+                c[i] = PackedSplat::pack(&rec, b.radiance, b.center, b.radius, facets);
+            }
+        }
+        if kind == MIXED {
+            self.cluster[i] = Some(b.cluster.expect("a mixed node has its facets"));
+        }
+    }
+}
 
 /// Subtrees smaller than this are built on the calling thread.
 const PARALLEL_CUTOFF: usize = 4096;
 
-/// Builds the subtree over `order` (surfel indices), returns its root and fills
-/// `below` (exactly `2·len − 2` slots) with its descendants; `base` is the node
-/// index of `below[0]`. Layout of `below`: both children, then the left child's
-/// descendants, then the right child's.
+/// Builds the subtree over `order` (surfel indices), returns its root and
+/// writes its descendants into `below` (exactly `2·len − 2` nodes); `base`
+/// (odd) is the node id of the first. Layout of `below`: both children,
+/// then the left child's descendants, then the right child's.
 /// `budget` is how many levels the subtree may have below its root (at least
 /// the median split's `⌈log₂ len⌉`).
+/// `sphere`: what the node's test fields are quantized against.
 pub(super) fn build_subtree(
     surfels: &[Surfel],
     order: &mut [u32],
-    below: &mut [BuildNode],
+    below: Out<'_>,
     base: u32,
     budget: usize,
+    sphere: Base,
 ) -> BuildNode {
-    debug_assert_eq!(below.len(), 2 * order.len() - 2);
+    debug_assert_eq!(below.cluster.len(), 2 * order.len() - 2);
     let (lo, hi) = position_bounds(surfels, order);
     let mut node = bound::bound_node(surfels, order, lo, hi);
+    let children = match sphere {
+        Base::Full => Base::Full,
+        Base::Root | Base::Parent(_) => {
+            let own = [node.center[0], node.center[1], node.center[2], node.radius];
+            let from = if let Base::Parent(b) = sphere { b } else { own };
+            let wide = node.cos == 0.0;
+            let (steps, d) = quantize::quantize(from, node.center, node.axis, wide, surfels, order);
+            // The facets' places are in units of the radius: rescaled to the decoded one.
+            if let Some(c) = node.cluster.as_deref_mut() {
+                let k = node.radius as f64 / d[field::R] as f64;
+                for p in c.plane.iter_mut() {
+                    for x in &mut p[..3] {
+                        *x = (*x as f64 * k) as f32;
+                    }
+                    p[3] = bound::round_up(p[3] as f64 * k);
+                }
+                for l in c.light.iter_mut().flatten() {
+                    *l = (*l as f64 * k) as f32;
+                }
+            }
+            node.center = [d[field::CX], d[field::CY], d[field::CZ]];
+            node.radius = d[field::R];
+            node.axis = [d[field::AX], d[field::AY], d[field::AZ]];
+            (node.cos, node.sin) = (d[field::COS], d[field::SIN]);
+            node.steps = steps;
+            node.base = from;
+            Base::Parent(quantize::base_of(&d))
+        }
+    };
     if order.len() == 1 {
         node.child = LEAF_BIT | order[0];
         return node;
@@ -68,24 +260,32 @@ pub(super) fn build_subtree(
         }
     };
     let (left_order, right_order) = order.split_at_mut(mid);
-    let (pair, rest) = below.split_at_mut(2);
-    let (left_below, right_below) = rest.split_at_mut(2 * left_order.len() - 2);
+    let (mut pair, rest) = below.split(2);
+    let (left_below, right_below) = rest.split(2 * left_order.len() - 2);
     let left_base = base + 2;
-    let right_base = left_base + left_below.len() as u32;
-    let (l, r) = if len >= PARALLEL_CUTOFF {
-        rayon::join(
-            || build_subtree(surfels, left_order, left_below, left_base, budget - 1),
-            || build_subtree(surfels, right_order, right_below, right_base, budget - 1),
-        )
-    } else {
-        (
-            build_subtree(surfels, left_order, left_below, left_base, budget - 1),
-            build_subtree(surfels, right_order, right_below, right_base, budget - 1),
+    let right_base = left_base + 2 * left_order.len() as u32 - 2;
+    let left = move || build_subtree(surfels, left_order, left_below, left_base, budget - 1, children);
+    let right = move || {
+        build_subtree(
+            surfels,
+            right_order,
+            right_below,
+            right_base,
+            budget - 1,
+            children,
         )
     };
+    let (l, r) = if len >= PARALLEL_CUTOFF {
+        rayon::join(left, right)
+    } else {
+        (left(), right())
+    };
     node.depth = 1 + l.depth.max(r.depth);
-    pair[0] = l;
-    pair[1] = r;
+    pair.write(0, 0, l);
+    pair.write(1, 1, r);
+    if let Base::Parent(b) = children {
+        pair.set_base(0, b);
+    }
     node.child = base;
     node
 }

@@ -43,7 +43,7 @@ fn inside(p: Vec3, v: &NodeView) -> bool {
 pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
     for k in 0..tree.len() as u32 {
         let v = tree.node(k);
-        let kind = tree.splat[k as usize].kind;
+        let kind = tree.splat_record(k).expect("k < len").kind;
         let problem = if !(v.center.is_finite() && v.center.abs().max_element() <= MAX_COORDINATE) {
             Some("centre not finite or beyond MAX_COORDINATE")
         } else if !(v.radius.is_finite() && v.radius >= 0.0) {

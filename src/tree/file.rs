@@ -272,17 +272,13 @@ impl TreeFile {
             s.radiance.to_array().iter().for_each(|&x| put_f32(&mut out, x));
         }
         for k in 0..tree.len() as u32 {
-            let (p, slot) = NodeArrays::locate(k);
-            let pair = &tree.nodes.pairs[p];
-            pair.f[..field::STORED]
-                .iter()
-                .for_each(|f| put_f32(&mut out, f[slot]));
-            put_u32(&mut out, pair.child[slot]);
-            let s = &tree.splat[k as usize];
+            (0..field::STORED).for_each(|j| put_f32(&mut out, tree.nodes.get(k, j)));
+            put_u32(&mut out, tree.nodes.child(k));
+            let s = tree.splat_record(k).expect("k < len");
             put_f32(&mut out, s.area);
             s.normal.iter().for_each(|&x| put_f32(&mut out, x));
             put_u32(&mut out, s.kind);
-            tree.radiance[k as usize]
+            tree.radiance(k)
                 .to_array()
                 .iter()
                 .for_each(|&x| put_f32(&mut out, x));
@@ -423,10 +419,14 @@ impl TreeFile {
             depth,
             ..Tree::default()
         };
-        tree.nodes.pairs = vec![PairRecord::default(); n as usize];
+        let mut pairs = vec![PairRecord::default(); n as usize];
+        let (mut splat, mut radiance) = (
+            Vec::with_capacity(nodes as usize),
+            Vec::with_capacity(nodes as usize),
+        );
         for k in 0..nodes as u32 {
             let (p, slot) = NodeArrays::locate(k);
-            let pair = &mut tree.nodes.pairs[p];
+            let pair = &mut pairs[p];
             for f in pair.f[..field::STORED].iter_mut() {
                 f[slot] = rd.f32();
             }
@@ -434,19 +434,14 @@ impl TreeFile {
             let area = rd.f32();
             let normal = rd.vec3().to_array();
             let kind = rd.u32();
-            tree.radiance.push(rd.vec3());
-            tree.splat.push(SplatRecord {
+            radiance.push(rd.vec3());
+            splat.push(SplatRecord {
                 centroid: rd.vec3().to_array(),
                 light_centroid: rd.vec3().to_array(),
                 area,
                 normal,
                 kind,
                 ..SplatRecord::default()
-            });
-            tree.facets_of.push(if kind == MIXED {
-                tree.cluster.len() as u32
-            } else {
-                u32::MAX
             });
             if kind == MIXED {
                 tree.cluster.push(Cluster::NONE);
@@ -470,6 +465,9 @@ impl TreeFile {
                 *x = rd.f32();
             }
         }
+        tree.nodes = NodeArrays::Full(pairs);
+        tree.mixed = super::Rank::new(splat.iter().map(|s| s.kind == MIXED));
+        tree.payload = super::Payload::Full { splat, radiance };
         check::values(&tree)
             .and_then(|()| check::structure(&tree, n as usize))
             .map_err(|fault| {

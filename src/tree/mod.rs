@@ -13,6 +13,12 @@
 //! outwards to `f32`; every operation is homogeneous in the coordinates, so
 //! scaling the input by `2^k` scales the tree's spheres by exactly `2^k`.
 //!
+//! A tree is stored at a [`Precision`]: `f32` fields, or compact, with each
+//! pair record's node-test fields in 16-bit steps against its parent's
+//! sphere (`tree/quantize.rs`) and each node's splat record and radiance in 32
+//! bytes (`tree/payload.rs`), its bounds still bounds. The build
+//! writes either in place.
+//!
 //! [`file`](mod@file) writes the surfels and their tree to a `.pbgi` file and reads it
 //! back, checked whole, so a render can skip building them.
 
@@ -26,8 +32,13 @@ pub(crate) mod bytes;
 pub(crate) use bound::FacetPlanes;
 mod check;
 pub mod file;
+mod payload;
+pub(crate) mod quantize;
 
 pub use file::{BakeRecord, TreeFile, TreeFileError};
+pub use payload::Precision;
+pub(crate) use payload::{Payload, Rank};
+pub(crate) use quantize::CompactPair;
 
 /// Index of a node in a [`Tree`].
 pub type NodeId = u32;
@@ -83,10 +94,18 @@ pub(crate) struct PairRecord {
 
 /// The node-test fields of the whole tree. Node `n` lives in record
 /// `(n + 1) / 2`, slot `(n + 1) % 2`: the root alone in record 0 (slot 1), then
-/// the sibling pairs `(2p − 1, 2p)` in record `p`.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct NodeArrays {
-    pub pairs: Vec<PairRecord>,
+/// the sibling pairs `(2p − 1, 2p)` in record `p`. Full records hold `f32`
+/// fields; compact ones ([`quantize`]) 16-bit steps against the parent.
+#[derive(Clone, Debug)]
+pub(crate) enum NodeArrays {
+    Full(Vec<PairRecord>),
+    Compact(Vec<CompactPair>),
+}
+
+impl Default for NodeArrays {
+    fn default() -> Self {
+        NodeArrays::Full(Vec::new())
+    }
 }
 
 impl NodeArrays {
@@ -103,23 +122,57 @@ impl NodeArrays {
         (2 * p).wrapping_sub(1)
     }
 
-    /// Field `j` of node `n`.
+    /// Field `j` of node `n` (decoded).
     #[inline(always)]
     pub fn get(&self, n: u32, j: usize) -> f32 {
         let (p, s) = Self::locate(n);
-        self.pairs[p].f[j][s]
+        match self {
+            NodeArrays::Full(pairs) => pairs[p].f[j][s],
+            NodeArrays::Compact(pairs) => pairs[p].decoded(s)[j],
+        }
     }
 
     /// Child pair record of node `n`, or `LEAF_BIT | surfel`.
     #[inline(always)]
     pub fn child(&self, n: u32) -> u32 {
         let (p, s) = Self::locate(n);
-        self.pairs[p].child[s]
+        match self {
+            NodeArrays::Full(pairs) => pairs[p].child[s],
+            NodeArrays::Compact(pairs) => pairs[p].child[s],
+        }
+    }
+
+    /// Number of pair records.
+    pub fn pairs(&self) -> usize {
+        match self {
+            NodeArrays::Full(pairs) => pairs.len(),
+            NodeArrays::Compact(pairs) => pairs.len(),
+        }
     }
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
-        (2 * self.pairs.len()).saturating_sub(1)
+        (2 * self.pairs()).saturating_sub(1)
+    }
+
+    /// Bytes of a pair record.
+    pub fn pair_bytes(&self) -> usize {
+        match self {
+            NodeArrays::Full(_) => std::mem::size_of::<PairRecord>(),
+            NodeArrays::Compact(_) => std::mem::size_of::<CompactPair>(),
+        }
+    }
+
+    /// Sets node `n`'s light offset (at least `offset`, in a compact record).
+    fn set_light_offset(&mut self, n: u32, offset: f32) {
+        let (p, s) = Self::locate(n);
+        match self {
+            NodeArrays::Full(pairs) => pairs[p].f[field::LIGHT_OFFSET][s] = offset,
+            NodeArrays::Compact(pairs) => {
+                let pair = &mut pairs[p];
+                pair.light_offset[s] = quantize::light_offset_steps(pair.base, pair.steps(s), offset);
+            }
+        }
     }
 }
 
@@ -248,6 +301,9 @@ pub struct NodeView {
     /// weighted by area times radiance (`|L|₁`); the area centroid where
     /// they send none.
     pub light_centroid: Vec3,
+    /// How far the light centroid lies from the area centroid, as the far
+    /// test reads it (a compact tree rounds it up to its next step).
+    pub light_offset: f32,
     /// Left child (the right one is `left + 1`), `None` for a leaf.
     pub children: Option<NodeId>,
     /// The surfel of a leaf (index into the cloud), `None` for an inner node.
@@ -276,112 +332,69 @@ pub struct NodeView {
 #[derive(Clone, Debug, Default)]
 pub struct Tree {
     pub(crate) nodes: NodeArrays,
-    pub(crate) splat: Vec<SplatRecord>,
-    radiance: Vec<Vec3>,
-    /// Per node: the index of its facets in `cluster` ([`MIXED`] nodes
-    /// only; `u32::MAX` for the others, which never read them).
-    pub(crate) facets_of: Vec<u32>,
+    /// What splatting reads of each node, at the tree's [`Precision`].
+    pub(crate) payload: Payload,
+    /// Which nodes are [`MIXED`]; a mixed node's rank is the index of its
+    /// facets in `cluster`.
+    pub(crate) mixed: Rank,
     /// The facets of the [`MIXED`] nodes, and what is derived of them.
     pub(crate) cluster: Vec<Cluster>,
     pub(crate) planes: Vec<FacetPlanes>,
     depth: u32,
 }
 
-/// A node as the builder makes it, before the split into arrays.
-#[derive(Clone, Debug, Default)]
-struct BuildNode {
-    center: [f32; 3],
-    centroid: [f32; 3],
-    light_centroid: [f32; 3],
-    radius: f32,
-    axis: [f32; 3],
-    cos: f32,
-    sin: f32,
-    child: u32,
-    area: f32,
-    normal: Vec3,
-    radiance: Vec3,
-    facets: u32,
-    /// The facets, where there are several.
-    cluster: Option<Box<Cluster>>,
-    depth: u32,
-}
-
 impl Tree {
     /// Builds the hierarchy. `O(n log n)`, deterministic, parallel over subtrees.
     pub fn build(cloud: &PointCloud) -> Tree {
+        Tree::build_with(cloud, Precision::Full)
+    }
+
+    /// Builds the hierarchy with its payload at `precision`, written in
+    /// place as the build goes: no node is held twice.
+    pub fn build_with(cloud: &PointCloud, precision: Precision) -> Tree {
         let surfels = cloud.surfels();
         let n = surfels.len();
-        if n == 0 {
-            return Tree::default();
-        }
+        let nodes = (2 * n).saturating_sub(1);
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut built = vec![BuildNode::default(); 2 * n - 1];
-        let (root, below) = built.split_first_mut().expect("n > 0");
+        let mut pairs = match precision {
+            Precision::Full => NodeArrays::Full(vec![PairRecord::default(); n]),
+            Precision::Compact => NodeArrays::Compact(vec![CompactPair::default(); n]),
+        };
+        let mut cluster: Vec<Option<Box<Cluster>>> = vec![None; nodes];
+        let mut payload = match precision {
+            Precision::Full => Payload::Full {
+                splat: vec![SplatRecord::default(); nodes],
+                radiance: vec![Vec3::ZERO; nodes],
+            },
+            Precision::Compact => Payload::Compact(vec![Default::default(); nodes]),
+        };
+        if n == 0 {
+            return Tree {
+                nodes: pairs,
+                payload,
+                ..Tree::default()
+            };
+        }
+        let (mut root, below) = build::Out::new(&mut pairs, &mut payload, &mut cluster).split(1);
         let budget = (build::ceil_log2(n) + EXTRA_DEPTH).min(MAX_DEPTH);
-        *root = build::build_subtree(surfels, &mut order, below, 1, budget);
-
+        // The root has pair record 0 to itself, in slot 1.
+        let sphere = match precision {
+            Precision::Full => build::Base::Full,
+            Precision::Compact => build::Base::Root,
+        };
+        let top = build::build_subtree(surfels, &mut order, below, 1, budget, sphere);
+        let depth = top.depth;
+        // The root's record's base is the root's own full sphere.
+        root.set_base(0, top.base);
+        root.write(0, 1, top);
         let mut tree = Tree {
-            depth: root.depth,
+            nodes: pairs,
+            payload,
+            mixed: Rank::new(cluster.iter().map(Option::is_some)),
+            cluster: cluster.into_iter().flatten().map(|c| *c).collect(),
+            depth,
             ..Tree::default()
         };
-        let pairs = &mut tree.nodes.pairs;
-        pairs.resize(n, PairRecord::default());
-        // Exact sizes: growing by doubling overshot by up to half again.
-        let mixed = built
-            .iter()
-            .filter(|b| b.child & LEAF_BIT == 0 && b.facets > 1)
-            .count();
-        tree.splat.reserve_exact(built.len());
-        tree.radiance.reserve_exact(built.len());
-        tree.facets_of.reserve_exact(built.len());
-        tree.cluster.reserve_exact(mixed);
-        for (k, b) in built.into_iter().enumerate() {
-            let (p, slot) = NodeArrays::locate(k as u32);
-            let values = [
-                b.center[0],
-                b.center[1],
-                b.center[2],
-                b.radius,
-                b.axis[0],
-                b.axis[1],
-                b.axis[2],
-                b.cos,
-                b.sin,
-            ];
-            for (j, v) in values.into_iter().enumerate() {
-                pairs[p].f[j][slot] = v;
-            }
-            // Children are stored by pair record: the left child `c` is odd.
-            pairs[p].child[slot] = if b.child & LEAF_BIT != 0 {
-                b.child
-            } else {
-                NodeArrays::locate(b.child).0 as u32
-            };
-            let kind = if b.child & LEAF_BIT != 0 {
-                LEAF
-            } else if b.facets <= 1 {
-                PLANAR
-            } else {
-                MIXED
-            };
-            tree.splat.push(SplatRecord {
-                centroid: b.centroid,
-                light_centroid: b.light_centroid,
-                area: b.area,
-                normal: b.normal.to_array(),
-                kind,
-                ..SplatRecord::default()
-            });
-            tree.radiance.push(b.radiance);
-            if kind == MIXED {
-                tree.facets_of.push(tree.cluster.len() as u32);
-                tree.cluster
-                    .push(*b.cluster.expect("a mixed node has its facets"));
-            } else {
-                tree.facets_of.push(u32::MAX);
-            }
-        }
         tree.derive();
         tree
     }
@@ -392,24 +405,21 @@ impl Tree {
     /// centroids; [`crate::CutOptions::light_offset`]).
     pub(crate) fn derive(&mut self) {
         self.planes = vec![FacetPlanes::default(); self.cluster.len()];
-        for k in 0..self.splat.len() as u32 {
-            let (p, slot) = NodeArrays::locate(k);
-            let f = &mut self.nodes.pairs[p].f;
-            let (r, sin) = (f[field::R][slot], f[field::SIN][slot]);
-            let rec = &mut self.splat[k as usize];
-            let cluster = self.facets_of[k as usize];
-            rec.derive(
-                r,
-                sin,
-                self.cluster.get(cluster as usize).unwrap_or(&Cluster::NONE),
-            );
-            if let Some(c) = self.cluster.get(cluster as usize) {
-                self.planes[cluster as usize] = FacetPlanes::of(rec, r, c);
+        for k in 0..self.len() as u32 {
+            let (r, sin) = (self.nodes.get(k, field::R), self.nodes.get(k, field::SIN));
+            let cluster = self.mixed.get(k as usize);
+            let c = cluster.map_or(&Cluster::NONE, |i| &self.cluster[i]);
+            if let Payload::Full { splat, .. } = &mut self.payload {
+                splat[k as usize].derive(r, sin, c);
+            }
+            let rec = self.splat_record(k).expect("k < len");
+            if let Some(i) = cluster {
+                self.planes[i] = FacetPlanes::of(&rec, r, c);
             }
             // Both centroids lie in the sphere (built so, or checked in a
             // file before this runs): at most `2R`, finite.
-            f[field::LIGHT_OFFSET][slot] =
-                Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
+            let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
+            self.nodes.set_light_offset(k, offset);
         }
     }
 
@@ -429,15 +439,14 @@ impl Tree {
     }
 
     /// Bytes of node data per surfel (the traversal fields, the splat
-    /// records, the radiance and the facets of the mixed nodes).
+    /// records and radiance, and the facets of the mixed nodes with what is
+    /// derived of them).
     pub fn bytes_per_surfel(&self) -> f64 {
-        let per_node = std::mem::size_of::<PairRecord>() / 2
-            + std::mem::size_of::<SplatRecord>()
-            + std::mem::size_of::<Vec3>()
-            + std::mem::size_of::<u32>();
+        let per_node = self.nodes.pair_bytes() / 2 + self.payload_bytes();
         let surfels = self.len().div_ceil(2).max(1);
-        let facets = self.cluster.len() * std::mem::size_of::<Cluster>();
-        (self.len() * per_node + facets) as f64 / surfels as f64
+        let facets =
+            self.cluster.len() * (std::mem::size_of::<Cluster>() + std::mem::size_of::<FacetPlanes>());
+        (self.len() * per_node + facets + self.mixed.bytes()) as f64 / surfels as f64
     }
 
     /// True when `node` is a leaf.
@@ -455,21 +464,22 @@ impl Tree {
 
     /// Everything known about one node. Panics if `node` is out of range.
     pub fn node(&self, node: NodeId) -> NodeView {
-        let k = node as usize;
         let a = &self.nodes;
         let g = |j| a.get(node, j);
         let c = a.child(node);
+        let s = self.splat_record(node).expect("node in range");
         NodeView {
             center: Vec3::new(g(field::CX), g(field::CY), g(field::CZ)),
             radius: g(field::R),
             cone_axis: Vec3::new(g(field::AX), g(field::AY), g(field::AZ)),
             cone_cos: g(field::COS),
             cone_sin: g(field::SIN),
-            area: self.splat[k].area,
-            normal: Vec3::from_array(self.splat[k].normal),
-            radiance: self.radiance[k],
-            centroid: Vec3::from_array(self.splat[k].centroid),
-            light_centroid: Vec3::from_array(self.splat[k].light_centroid),
+            area: s.area,
+            normal: Vec3::from_array(s.normal),
+            radiance: self.radiance(node),
+            centroid: Vec3::from_array(s.centroid),
+            light_centroid: Vec3::from_array(s.light_centroid),
+            light_offset: g(field::LIGHT_OFFSET),
             children: self.left_child(node),
             surfel: (c & LEAF_BIT != 0).then_some(c & !LEAF_BIT),
         }
@@ -478,43 +488,34 @@ impl Tree {
     /// Total surfel area below `node` (shading payload).
     #[inline]
     pub fn area(&self, node: NodeId) -> f32 {
-        self.splat[node as usize].area
+        self.splat_record(node).expect("node in range").area
     }
 
     /// Area-weighted mean normal below `node` (length ≤ 1; shorter where normals spread).
     #[inline]
     pub fn mean_normal(&self, node: NodeId) -> Vec3 {
-        Vec3::from_array(self.splat[node as usize].normal)
-    }
-
-    /// Area-weighted mean outgoing radiance below `node`.
-    #[inline]
-    pub fn radiance(&self, node: NodeId) -> Vec3 {
-        self.radiance[node as usize]
-    }
-
-    /// The radiance of every node, indexed by node.
-    #[inline]
-    pub(crate) fn radiance_slice(&self) -> &[Vec3] {
-        &self.radiance
+        Vec3::from_array(self.splat_record(node).expect("node in range").normal)
     }
 
     /// Bounding-sphere radius of `node`.
     #[inline(always)]
     pub(crate) fn bounding_radius(&self, node: NodeId) -> f32 {
-        let (p, s) = NodeArrays::locate(node);
-        self.nodes.pairs.get(p).map_or(0.0, |pair| pair.f[field::R][s])
+        if (node as usize) < self.len() {
+            self.nodes.get(node, field::R)
+        } else {
+            0.0
+        }
     }
 
     /// Bounding-sphere centre and radius of `node`.
     #[inline]
     pub fn sphere(&self, node: NodeId) -> (Vec3, f32) {
         let (p, s) = NodeArrays::locate(node);
-        let f = &self.nodes.pairs[p].f;
-        (
-            Vec3::new(f[field::CX][s], f[field::CY][s], f[field::CZ][s]),
-            f[field::R][s],
-        )
+        let f = match &self.nodes {
+            NodeArrays::Full(pairs) => std::array::from_fn(|j| pairs[p].f[j][s]),
+            NodeArrays::Compact(pairs) => pairs[p].decoded(s),
+        };
+        (Vec3::new(f[field::CX], f[field::CY], f[field::CZ]), f[field::R])
     }
 
     /// Parent of every node (`None` for the root), for invariant checks.

@@ -757,8 +757,9 @@ fn decide(lhs: f64, rhs: f64, tol: f64) -> Option<bool> {
 pub fn node_test64(v: &NodeView, x: Vec3, n: Vec3, omega: f32, k: f32) -> NodeTest64 {
     let (c, x, n) = (v.center.as_dvec3(), x.as_dvec3(), n.as_dvec3());
     let r = v.radius as f64;
-    // The far test's radius: `R + k·|l − c|` (light and area centroids).
-    let split = r + k as f64 * (v.light_centroid.as_dvec3() - v.centroid.as_dvec3()).length();
+    // The far test's radius: `R + k·|l − c|` (light and area centroids),
+    // the offset as the tree holds it.
+    let split = r + k as f64 * v.light_offset as f64;
     let d = c - x;
     let len = d.length();
     // f32 evaluation errors are relative to |v| and R (v = c − x is one
@@ -821,7 +822,7 @@ pub fn semantics(
                     "splatted inner node {k} is too near: π S² ≥ Ω d² = {:e} (R {:e}, light offset {:e})",
                     omega as f64 * (v.center.as_dvec3() - x.as_dvec3()).length_squared(),
                     v.radius,
-                    v.light_centroid.distance(v.centroid)
+                    v.light_offset
                 ));
             }
         }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 use pbgi::gather::MAX_THREADS;
 use pbgi::render::{Crop, Direct, Gathers, ReferenceOptions, RenderOptions, Tiles};
+use pbgi::tree::Precision;
 use pbgi::{CutOptions, Isa, SchemeChoice};
 
 use crate::farm::{Frames, StitchArgs};
@@ -237,6 +238,10 @@ pub struct Settings {
     /// 0: groups of 8).
     #[arg(long, value_name = "N", default_value_t = RenderOptions::default().surfel_gathers)]
     pub surfel_gathers: u32,
+    /// How the tree stores what splatting reads: full (f32) or compact
+    /// (quantized against each node's sphere, 32 bytes a node).
+    #[arg(long, value_parser = ["full", "compact"], default_value = "full")]
+    pub tree_precision: String,
     /// Hybrid: switch an entry to single below this many active lanes.
     #[arg(long, default_value_t = CutOptions::default().hybrid_threshold, help_heading = DEVELOPER)]
     pub hybrid_threshold: u32,
@@ -270,6 +275,11 @@ impl Settings {
             density: self.density.unwrap_or(RenderOptions::default().density),
             surfel_budget: self.surfels,
             surfel_gathers: self.surfel_gathers,
+            tree_precision: if self.tree_precision == "compact" {
+                Precision::Compact
+            } else {
+                Precision::Full
+            },
             ..RenderOptions::default()
         })
     }

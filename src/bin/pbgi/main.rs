@@ -407,12 +407,13 @@ pub(crate) fn print_summary(
     );
     if out.surfels > 0 {
         println!(
-            "{} surfels ({}), {} receivers gathered{}, {:.0} nodes tested per receiver{}",
+            "{} surfels ({}; tree {:.0} bytes a surfel), {} receivers gathered{}, {:.0} nodes tested per receiver{}",
             out.surfels,
             match opts.surfel_budget {
                 Some(b) => format!("budget {b}"),
                 None => format!("density {}", opts.density),
             },
+            out.tree_bytes_per_surfel,
             out.receivers,
             if let Gathers::Cache { .. } = opts.gathers {
                 format!(" ({} of them cache records, {} held)", out.records, out.cached)
