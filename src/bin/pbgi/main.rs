@@ -407,7 +407,7 @@ pub(crate) fn print_summary(
     );
     if out.surfels > 0 {
         println!(
-            "{} surfels ({}; tree {:.0} bytes a surfel), {} receivers gathered{}, {:.0} nodes tested per receiver{}",
+            "{} surfels ({}), tree {:.0} bytes a surfel, {} receivers gathered{}, {:.0} nodes tested per receiver{}",
             out.surfels,
             match opts.surfel_budget {
                 Some(b) => format!("budget {b}"),
