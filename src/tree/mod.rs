@@ -132,6 +132,16 @@ impl NodeArrays {
         }
     }
 
+    /// Every field of node `n` (decoded once), in the order of [`field`].
+    #[inline(always)]
+    pub fn fields(&self, n: u32) -> [f32; field::COUNT] {
+        let (p, s) = Self::locate(n);
+        match self {
+            NodeArrays::Full(pairs) => std::array::from_fn(|j| pairs[p].f[j][s]),
+            NodeArrays::Compact(pairs) => pairs[p].decoded(s),
+        }
+    }
+
     /// Child pair record of node `n`, or `LEAF_BIT | surfel`.
     #[inline(always)]
     pub fn child(&self, n: u32) -> u32 {
@@ -206,15 +216,21 @@ pub(crate) struct SplatRecord {
 }
 
 impl SplatRecord {
+    /// `rise`, `lift` and `radius` of a node of kind `kind`, area `area`,
+    /// bounding radius `radius` and cone sine `sin`.
+    #[inline(always)]
+    pub(crate) fn bounds(kind: u32, area: f32, radius: f32, sin: f32) -> (f32, f32, f32) {
+        match kind {
+            LEAF => ((area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0, 0.0),
+            PLANAR => (radius, radius * sin, radius),
+            _ => (0.0, f32::INFINITY, radius),
+        }
+    }
+
     /// Fills the derived fields from the node's bounding radius `radius`,
     /// its cone's sine `sin` and, for a [`MIXED`] node, its `cluster`.
     pub(crate) fn derive(&mut self, radius: f32, sin: f32, cluster: &Cluster) {
-        self.radius = if self.kind == LEAF { 0.0 } else { radius };
-        (self.rise, self.lift) = match self.kind {
-            LEAF => ((self.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
-            PLANAR => (radius, radius * sin),
-            _ => (0.0, f32::INFINITY),
-        };
+        (self.rise, self.lift, self.radius) = Self::bounds(self.kind, self.area, radius, sin);
         self.shifted = match self.kind {
             PLANAR => self.light_centroid != self.centroid,
             MIXED => cluster
@@ -510,11 +526,7 @@ impl Tree {
     /// Bounding-sphere centre and radius of `node`.
     #[inline]
     pub fn sphere(&self, node: NodeId) -> (Vec3, f32) {
-        let (p, s) = NodeArrays::locate(node);
-        let f = match &self.nodes {
-            NodeArrays::Full(pairs) => std::array::from_fn(|j| pairs[p].f[j][s]),
-            NodeArrays::Compact(pairs) => pairs[p].decoded(s),
-        };
+        let f = self.nodes.fields(node);
         (Vec3::new(f[field::CX], f[field::CY], f[field::CZ]), f[field::R])
     }
 

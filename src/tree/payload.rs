@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::{Cluster, FacetPlanes, LEAF, NodeArrays, NodeId, PLANAR, SplatRecord, Tree, field};
+use super::{Cluster, FacetPlanes, NodeArrays, NodeId, SplatRecord, Tree, field};
 
 /// How a tree stores what splatting reads of its nodes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -132,11 +132,7 @@ impl PackedSplat {
     pub(crate) fn unpack(&self, center: [f32; 3], r: f32, sin: f32) -> SplatRecord {
         let kind = u32::from(self.kind & !SHIFTED);
         let normal = self.normal.map(|q| f32::from(q) * (1.0 / STEPS as f32));
-        let (rise, lift) = match kind {
-            LEAF => ((self.area * std::f32::consts::FRAC_1_PI).sqrt(), 0.0),
-            PLANAR => (r, r * sin),
-            _ => (0.0, f32::INFINITY),
-        };
+        let (rise, lift, radius) = SplatRecord::bounds(kind, self.area, r, sin);
         SplatRecord {
             centroid: offset(center, r, self.centroid),
             area: self.area,
@@ -145,7 +141,7 @@ impl PackedSplat {
             light_centroid: offset(center, r, self.light),
             rise,
             lift,
-            radius: if kind == LEAF { 0.0 } else { r },
+            radius,
             shifted: self.kind & SHIFTED != 0,
         }
     }
@@ -232,8 +228,9 @@ impl Tree {
             Payload::Full { splat, .. } => splat.get(k).copied(),
             Payload::Compact(packed) => {
                 let p = packed.get(k)?;
-                let (c, r) = self.sphere(node);
-                Some(p.unpack(c.to_array(), r, self.nodes.get(node, field::SIN)))
+                let f = self.nodes.fields(node);
+                let c = [f[field::CX], f[field::CY], f[field::CZ]];
+                Some(p.unpack(c, f[field::R], f[field::SIN]))
             }
         }
     }
