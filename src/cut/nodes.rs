@@ -71,9 +71,21 @@ impl Pairs for [PairRecord] {
         // SAFETY: the caller's.
         let pairs: [&PairRecord; PAIRS] =
             std::array::from_fn(|i| unsafe { self.get_unchecked(entries[i] as usize) });
-        // Field `j` of the popped records into lanes `2i, 2i + 1`.
+        // Field `j` of the popped records into lanes `2i, 2i + 1`. Written
+        // out: `array::from_fn` over vectors stays out of line on NEON.
         let load = |j: usize| F32s::from_array(std::array::from_fn(|l| pairs[l / 2].f[j][l & 1]));
-        let fields = std::array::from_fn(load);
+        let fields = [
+            load(0),
+            load(1),
+            load(2),
+            load(3),
+            load(4),
+            load(5),
+            load(6),
+            load(7),
+            load(8),
+            load(9),
+        ];
         let child = Simd::from_array(std::array::from_fn(|l| pairs[l / 2].child[l & 1]));
         (NodeLanes::from_fields(fields), child)
     }
@@ -96,7 +108,8 @@ impl Pairs for [CompactPair] {
         // SAFETY: the caller's.
         let pairs: [&CompactPair; PAIRS] =
             std::array::from_fn(|i| unsafe { self.get_unchecked(entries[i] as usize) });
-        let base = std::array::from_fn(|j| F32s::from_array(std::array::from_fn(|l| pairs[l / 2].base[j])));
+        let base = |j: usize| F32s::from_array(std::array::from_fn(|l| pairs[l / 2].base[j]));
+        let base = [base(0), base(1), base(2), base(3)];
         let signed = |f: fn(&CompactPair) -> &[i16; 2]| {
             Simd::<i16, LANES>::from_array(std::array::from_fn(|l| f(pairs[l / 2])[l & 1])).cast::<f32>()
         };
