@@ -61,10 +61,10 @@ impl NodeSplat<f32> {
 /// What a node shows besides its geometry: its kind, its mean radiance and
 /// its light by direction (read for a [`MIXED`] node only).
 #[derive(Clone, Copy)]
-pub(crate) struct NodeLight<'a> {
+pub(crate) struct NodeLight {
     pub kind: u32,
     pub radiance: Vec3,
-    pub cluster: &'a Cluster,
+    pub cluster: Cluster,
     /// Its [`SplatRecord`]'s bounds: `rise·s + lift`, `R`, and whether
     /// its light centroid is not its area centroid.
     pub rise: f32,
@@ -73,14 +73,14 @@ pub(crate) struct NodeLight<'a> {
     pub shifted: bool,
 }
 
-impl NodeLight<'static> {
+impl NodeLight {
     /// A node of one mean normal showing `radiance` (`kind`: planar or leaf).
     #[cfg(test)]
     pub(crate) fn flat(kind: u32, radiance: Vec3) -> Self {
         NodeLight {
             kind,
             radiance,
-            cluster: &Cluster::NONE,
+            cluster: Cluster::NONE,
             rise: 0.0,
             lift: f32::INFINITY,
             radius: 0.0,
@@ -89,12 +89,12 @@ impl NodeLight<'static> {
     }
 }
 
-impl<'a> NodeLight<'a> {
+impl NodeLight {
     /// Node `node` of `tree` (`None` if it is not one).
     #[inline(always)]
-    pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(SplatRecord, Self)> {
+    pub(crate) fn of(tree: &Tree, node: NodeId) -> Option<(SplatRecord, Self)> {
         let rec = tree.splat_record(node)?;
-        let cluster = tree.cluster_of(node).unwrap_or(&Cluster::NONE);
+        let cluster = tree.cluster_of(node).unwrap_or(Cluster::NONE);
         Some((
             rec,
             NodeLight {
@@ -228,12 +228,7 @@ fn near_field<V: Real>(area: V, m: [V; 3], w: [V; 3], l2: V, n: [V; 3]) -> V {
 /// it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
 /// non-finite distance or `Ω`, a node facing away, a centre straight below.
 #[inline(always)]
-pub(crate) fn locate<V: Real>(
-    s: &NodeSplat<V>,
-    light: &NodeLight<'_>,
-    f: &FrameLanes<V>,
-    half: V,
-) -> Located<V> {
+pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLanes<V>, half: V) -> Located<V> {
     let vx = s.cx - f.px;
     let vy = s.cy - f.py;
     let vz = s.cz - f.pz;

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::bound::BuildNode;
-use super::payload::PackedSplat;
+use super::payload::{PackedFacets, PackedSplat};
 use super::quantize::{self, CompactPair};
 use super::{
     Cluster, LEAF, LEAF_BIT, MIXED, NodeArrays, PLANAR, PairRecord, Payload, SplatRecord, bound, field,
@@ -158,8 +158,12 @@ impl<'a> Out<'a> {
                 r[i] = b.radiance;
             }
             PayloadOut::Compact(c) => {
-                let facets = b.cluster.as_deref().unwrap_or(&Cluster::NONE);
-                c[i] = PackedSplat::pack(&rec, b.radiance, b.center, b.radius, facets);
+                // Whether the light is shifted, of the facets as a render reads them.
+                let facets = b
+                    .cluster
+                    .as_deref()
+                    .map_or(Cluster::NONE, |c| PackedFacets::pack(c).unpack());
+                c[i] = PackedSplat::pack(&rec, b.radiance, b.center, b.radius, &facets);
             }
         }
         if kind == MIXED {

@@ -69,7 +69,10 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
             return Err(at(k, p.to_string()));
         }
     }
-    for (i, c) in tree.cluster.iter().enumerate() {
+    for (i, c) in (0..tree.facets.len())
+        .filter_map(|i| tree.facets.get(i))
+        .enumerate()
+    {
         let bad = c.facet.iter().any(|f| {
             let (an, l) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
             !(an.is_finite() && an.length() <= UNIT && l.is_finite() && l.min_element() >= 0.0)

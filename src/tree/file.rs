@@ -245,7 +245,7 @@ impl TreeFile {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let (tree, n) = (&self.tree, self.cloud.len());
-        let size = HEADER + SURFEL * n + NODE * tree.len() + CLUSTER * tree.cluster.len() + CHECKSUM;
+        let size = HEADER + SURFEL * n + NODE * tree.len() + CLUSTER * tree.facets.len() + CHECKSUM;
         let mut out = Vec::with_capacity(size);
         let b = &self.bake;
         out.extend_from_slice(&MAGIC);
@@ -261,7 +261,7 @@ impl TreeFile {
         );
         put_f32(&mut out, b.max_solid_angle);
         put_u32(&mut out, b.microbuffer);
-        for count in [n, tree.cluster.len(), tree.depth()] {
+        for count in [n, tree.facets.len(), tree.depth()] {
             put_u32(&mut out, count as u32);
         }
         for s in self.cloud.surfels() {
@@ -285,7 +285,7 @@ impl TreeFile {
             s.centroid.iter().for_each(|&x| put_f32(&mut out, x));
             s.light_centroid.iter().for_each(|&x| put_f32(&mut out, x));
         }
-        for c in &tree.cluster {
+        for c in (0..tree.facets.len()).filter_map(|i| tree.facets.get(i)) {
             c.facet.iter().flatten().for_each(|&x| put_f32(&mut out, x));
             c.plane.iter().flatten().for_each(|&x| put_f32(&mut out, x));
             c.light.iter().flatten().for_each(|&x| put_f32(&mut out, x));
@@ -424,6 +424,7 @@ impl TreeFile {
             Vec::with_capacity(nodes as usize),
             Vec::with_capacity(nodes as usize),
         );
+        let mut cluster = Vec::new();
         for k in 0..nodes as u32 {
             let (p, slot) = NodeArrays::locate(k);
             let pair = &mut pairs[p];
@@ -444,17 +445,17 @@ impl TreeFile {
                 ..SplatRecord::default()
             });
             if kind == MIXED {
-                tree.cluster.push(Cluster::NONE);
+                cluster.push(Cluster::NONE);
             }
         }
         let clusters_at = rd.at;
-        if tree.cluster.len() as u64 != clusters {
+        if cluster.len() as u64 != clusters {
             return Err(invalid(
                 56,
-                format!("{clusters} clusters, but {} mixed nodes", tree.cluster.len()),
+                format!("{clusters} clusters, but {} mixed nodes", cluster.len()),
             ));
         }
-        for c in tree.cluster.iter_mut() {
+        for c in cluster.iter_mut() {
             for x in c
                 .facet
                 .iter_mut()
@@ -468,6 +469,7 @@ impl TreeFile {
         tree.nodes = NodeArrays::Full(pairs);
         tree.mixed = super::Rank::new(splat.iter().map(|s| s.kind == MIXED));
         tree.payload = super::Payload::Full { splat, radiance };
+        tree.facets = super::Facets::new(cluster, super::Precision::Full);
         check::values(&tree)
             .and_then(|()| check::structure(&tree, n as usize))
             .map_err(|fault| {

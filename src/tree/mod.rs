@@ -37,7 +37,7 @@ pub(crate) mod quantize;
 
 pub use file::{BakeRecord, TreeFile, TreeFileError};
 pub use payload::Precision;
-pub(crate) use payload::{Payload, Rank};
+pub(crate) use payload::{Facets, Payload, Rank};
 pub(crate) use quantize::CompactPair;
 
 /// Index of a node in a [`Tree`].
@@ -351,11 +351,11 @@ pub struct Tree {
     /// What splatting reads of each node, at the tree's [`Precision`].
     pub(crate) payload: Payload,
     /// Which nodes are [`MIXED`]; a mixed node's rank is the index of its
-    /// facets in `cluster`.
+    /// facets in `facets`.
     pub(crate) mixed: Rank,
-    /// The facets of the [`MIXED`] nodes, and what is derived of them.
-    pub(crate) cluster: Vec<Cluster>,
-    pub(crate) planes: Vec<FacetPlanes>,
+    /// The facets of the [`MIXED`] nodes (and, in a full tree, what is
+    /// derived of them), at the tree's [`Precision`].
+    pub(crate) facets: Facets,
     depth: u32,
 }
 
@@ -407,9 +407,8 @@ impl Tree {
             nodes: pairs,
             payload,
             mixed: Rank::new(cluster.iter().map(Option::is_some)),
-            cluster: cluster.into_iter().flatten().map(|c| *c).collect(),
+            facets: Facets::new(cluster.into_iter().flatten().map(|c| *c).collect(), precision),
             depth,
-            ..Tree::default()
         };
         tree.derive();
         tree
@@ -420,22 +419,24 @@ impl Tree {
     /// each node's light offset `|l − c|` (`l`, `c` its light and area
     /// centroids; [`crate::CutOptions::light_offset`]).
     pub(crate) fn derive(&mut self) {
-        self.planes = vec![FacetPlanes::default(); self.cluster.len()];
+        let mut planes = Vec::new();
         for k in 0..self.len() as u32 {
             let (r, sin) = (self.nodes.get(k, field::R), self.nodes.get(k, field::SIN));
-            let cluster = self.mixed.get(k as usize);
-            let c = cluster.map_or(&Cluster::NONE, |i| &self.cluster[i]);
+            let c = self.cluster_of(k).unwrap_or(Cluster::NONE);
             if let Payload::Full { splat, .. } = &mut self.payload {
-                splat[k as usize].derive(r, sin, c);
+                splat[k as usize].derive(r, sin, &c);
             }
             let rec = self.splat_record(k).expect("k < len");
-            if let Some(i) = cluster {
-                self.planes[i] = FacetPlanes::of(&rec, r, c);
+            if let (Facets::Full { .. }, Some(_)) = (&self.facets, self.mixed.get(k as usize)) {
+                planes.push(FacetPlanes::of(&rec, r, &c));
             }
             // Both centroids lie in the sphere (built so, or checked in a
             // file before this runs): at most `2R`, finite.
             let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
             self.nodes.set_light_offset(k, offset);
+        }
+        if let Facets::Full { planes: p, .. } = &mut self.facets {
+            *p = planes;
         }
     }
 
@@ -460,8 +461,7 @@ impl Tree {
     pub fn bytes_per_surfel(&self) -> f64 {
         let per_node = self.nodes.pair_bytes() / 2 + self.payload_bytes();
         let surfels = self.len().div_ceil(2).max(1);
-        let facets =
-            self.cluster.len() * (std::mem::size_of::<Cluster>() + std::mem::size_of::<FacetPlanes>());
+        let facets = self.facets.len() * self.facet_bytes();
         (self.len() * per_node + facets + self.mixed.bytes()) as f64 / surfels as f64
     }
 
