@@ -223,7 +223,22 @@ fn prop_compact(case: TreeCase) -> TestResult {
         let angle = |c: f32| (c as f64).clamp(-1.0, 1.0).acos();
         let round = 4.0 * f32::EPSILON as f64 * (b.center.abs().max_element() + b.radius) as f64;
         let off = |x: Vec3, y: Vec3| (x.as_dvec3() - y.as_dvec3()).abs().max_element();
-        let step = half * b.radius as f64 + round;
+        // A leaf's centroid is its decoded centre, and its normal its
+        // decoded axis (its pair record holds its surfel's disk): within
+        // half a step of the parent's radius, and the axis's half step plus
+        // what normalizing it moves, `√3` half steps.
+        let leaf = b.surfel.is_some();
+        // Decoded from the parent's base, a leaf's centre rounds as that does.
+        let base_round = parents[k as usize].map_or(round, |p| {
+            let q = compact.node(p);
+            4.0 * f32::EPSILON as f64 * (q.center.abs().max_element() + q.radius) as f64
+        });
+        let step = if leaf {
+            half * parent + round + base_round
+        } else {
+            half * b.radius as f64 + round
+        };
+        let normal_step = if leaf { (1.0 + 3f64.sqrt()) * half } else { half } + 1e-7;
         let top = a.radiance.max_element() as f64;
         let problem = if (a.area, a.children, a.surfel) != (b.area, b.children, b.surfel) {
             Some("the area or the links changed".to_string())
@@ -252,7 +267,7 @@ fn prop_compact(case: TreeCase) -> TestResult {
                 b.light_offset,
                 b.light_centroid.distance(b.centroid)
             ))
-        } else if off(a.normal, b.normal) > half + 1e-7 {
+        } else if off(a.normal, b.normal) > normal_step {
             Some(format!("normal {} against {}", b.normal, a.normal))
         } else if off(a.radiance, b.radiance) > top / 65535.0 * (1.0 + 1e-6) || b.radiance.min_element() < 0.0
         {

@@ -116,7 +116,6 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
         (round_down(cos_min), round_up(sin).min(1.0))
     };
     let radius32 = round_up(radius * (1.0 + 1e-6));
-    let pi_area = std::f64::consts::PI * area;
     // Where the node's surface is (its area centroid) and where its light
     // comes from (the centroid weighted by area times radiance; the area
     // centroid where it sends none): at each, the far-field estimate of its
@@ -137,7 +136,7 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
         sin,
         child: 0,
         // Saturates: radii up to `MAX_COORDINATE` can make `π Σ r²` overflow f32.
-        area: (pi_area as f32).min(f32::MAX),
+        area: disks_area(area),
         normal: (normal / area).as_vec3(),
         radiance: (radiance / area).as_vec3(),
         facets: facets.len() as u32,
@@ -192,6 +191,11 @@ fn round_down(x: f64) -> f32 {
 /// hold the normals a fourth facet would have had), shows less, and its
 /// disks would leave gaps where its surface is.
 const FLAT: f32 = 0.9;
+
+/// The area a node stores of disks whose squared radii sum to `r2`.
+pub(crate) fn disks_area(r2: f64) -> f32 {
+    ((std::f64::consts::PI * r2) as f32).min(f32::MAX)
+}
 
 /// What the microbuffer reads of a mixed cluster's facets that depends on
 /// the node alone, derived once per tree rather than for every receiver

@@ -39,7 +39,9 @@ enum PairsOut<'a> {
 }
 
 enum PayloadOut<'a> {
+    /// Per node.
     Full(&'a mut [SplatRecord], &'a mut [Vec3]),
+    /// Per pair record, its parent's (a leaf's is its surfel's, made apart).
     Compact(&'a mut [PackedSplat]),
 }
 
@@ -55,7 +57,7 @@ impl<'a> Out<'a> {
         };
         let payload = match payload {
             Payload::Full { splat, radiance } => PayloadOut::Full(splat, radiance),
-            Payload::Compact(packed) => PayloadOut::Compact(packed),
+            Payload::Compact { inner, .. } => PayloadOut::Compact(inner),
         };
         Out {
             pairs,
@@ -84,7 +86,7 @@ impl<'a> Out<'a> {
                 (PayloadOut::Full(s0, r0), PayloadOut::Full(s1, r1))
             }
             PayloadOut::Compact(c) => {
-                let (a, b) = c.split_at_mut(nodes);
+                let (a, b) = c.split_at_mut(at);
                 (PayloadOut::Compact(a), PayloadOut::Compact(b))
             }
         };
@@ -137,38 +139,48 @@ impl<'a> Out<'a> {
             }
             PairsOut::Compact(p) => p[i / 2].set(slot, &b.steps, child),
         }
-        let kind = if leaf {
-            LEAF
-        } else if b.facets <= 1 {
-            PLANAR
-        } else {
-            MIXED
-        };
-        let rec = SplatRecord {
-            centroid: b.centroid,
-            light_centroid: b.light_centroid,
-            area: b.area,
-            normal: b.normal.to_array(),
-            kind,
-            ..SplatRecord::default()
-        };
-        match &mut self.payload {
-            PayloadOut::Full(s, r) => {
-                s[i] = rec;
-                r[i] = b.radiance;
-            }
-            PayloadOut::Compact(c) => {
-                // Whether the light is shifted, of the facets as a render reads them.
-                let facets = b
-                    .cluster
-                    .as_deref()
-                    .map_or(Cluster::NONE, |c| PackedFacets::pack(c).unpack());
-                c[i] = PackedSplat::pack(&rec, b.radiance, b.center, b.radius, &facets);
-            }
+        let rec = record(&b, leaf);
+        if let PayloadOut::Full(s, r) = &mut self.payload {
+            s[i] = rec;
+            r[i] = b.radiance;
         }
-        if kind == MIXED {
+        if rec.kind == MIXED {
             self.cluster[i] = Some(b.cluster.expect("a mixed node has its facets"));
         }
+    }
+}
+
+impl Out<'_> {
+    /// Writes the packed payload of `b`, the parent of the run's first pair
+    /// record, in a compact tree (a full tree's is written with the node).
+    fn write_parent(&mut self, b: &BuildNode) {
+        if let PayloadOut::Compact(c) = &mut self.payload {
+            // Whether the light is shifted, of the facets as a render reads them.
+            let facets = b
+                .cluster
+                .as_deref()
+                .map_or(Cluster::NONE, |c| PackedFacets::pack(c).unpack());
+            c[0] = PackedSplat::pack(&record(b, false), b.radiance, b.center, b.radius, &facets);
+        }
+    }
+}
+
+/// The splat record of `b`, without what is derived of it.
+fn record(b: &BuildNode, leaf: bool) -> SplatRecord {
+    let kind = if leaf {
+        LEAF
+    } else if b.facets <= 1 {
+        PLANAR
+    } else {
+        MIXED
+    };
+    SplatRecord {
+        centroid: b.centroid,
+        light_centroid: b.light_centroid,
+        area: b.area,
+        normal: b.normal.to_array(),
+        kind,
+        ..SplatRecord::default()
     }
 }
 
@@ -185,7 +197,7 @@ const PARALLEL_CUTOFF: usize = 4096;
 pub(super) fn build_subtree(
     surfels: &[Surfel],
     order: &mut [u32],
-    below: Out<'_>,
+    mut below: Out<'_>,
     base: u32,
     budget: usize,
     sphere: Base,
@@ -227,6 +239,7 @@ pub(super) fn build_subtree(
         return node;
     }
 
+    below.write_parent(&node);
     let len = order.len();
     let fits = |back: usize| budget > 0 && ceil_log2(back.max(len - back)) < budget;
     let mid = match back_to_back(surfels, order, lo, hi).filter(|&(_, back)| fits(back)) {

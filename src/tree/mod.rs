@@ -37,7 +37,7 @@ pub(crate) mod quantize;
 
 pub use file::{BakeRecord, TreeFile, TreeFileError};
 pub use payload::Precision;
-pub(crate) use payload::{Facets, Payload, Rank};
+pub(crate) use payload::{Facets, PackedLeaf, Payload, Rank};
 pub(crate) use quantize::CompactPair;
 
 /// Index of a node in a [`Tree`].
@@ -382,7 +382,10 @@ impl Tree {
                 splat: vec![SplatRecord::default(); nodes],
                 radiance: vec![Vec3::ZERO; nodes],
             },
-            Precision::Compact => Payload::Compact(vec![Default::default(); nodes]),
+            Precision::Compact => Payload::Compact {
+                inner: vec![Default::default(); n],
+                leaves: surfels.iter().map(PackedLeaf::of).collect(),
+            },
         };
         if n == 0 {
             return Tree {
@@ -459,10 +462,10 @@ impl Tree {
     /// records and radiance, and the facets of the mixed nodes with what is
     /// derived of them).
     pub fn bytes_per_surfel(&self) -> f64 {
-        let per_node = self.nodes.pair_bytes() / 2 + self.payload_bytes();
+        let pairs = self.nodes.pairs() * self.nodes.pair_bytes();
         let surfels = self.len().div_ceil(2).max(1);
         let facets = self.facets.len() * self.facet_bytes();
-        (self.len() * per_node + facets + self.mixed.bytes()) as f64 / surfels as f64
+        (pairs + self.payload_bytes() + facets + self.mixed.bytes()) as f64 / surfels as f64
     }
 
     /// True when `node` is a leaf.

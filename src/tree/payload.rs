@@ -1,5 +1,5 @@
-//! What splatting reads of each node (its [`SplatRecord`] and radiance),
-//! stored whole or packed into half a cache line, and which node's facets
+//! What splatting reads of each node (its [`SplatRecord`] and radiance, and
+//! a mixed node's facets), stored whole or packed, and which node's facets
 //! a mixed node's are.
 //!
 //! The packed form ([`Precision::Compact`]) quantizes against the node's own
@@ -7,23 +7,29 @@
 //! centroids as offsets in steps of `R / 32767` (they lie in the sphere, so
 //! the offsets fit), the mean normal (at most unit length) in steps of
 //! `1 / 32767`, the radiance with one exponent shared by its three 16-bit
-//! mantissas, and the area whole. Rounding is to the nearest step, so the
-//! error has no sign: a centroid moves by at most `R / 65534` per axis, a
-//! radiance by a part in 65535 of its brightest channel. Decoding is
-//! `+ − ×` on `f32` alone, the same on every path, so a compact tree's
-//! images are as deterministic as a full one's.
+//! mantissas, and the area whole: 32 bytes an inner node. A leaf is its
+//! surfel's disk, which its pair record already holds (centre, radius, and
+//! normal as the cone's axis): it keeps only its area and radiance, in 12
+//! bytes ([`PackedLeaf`]). Rounding is to the nearest step, so the error has
+//! no sign: a centroid moves by at most `R / 65534` per axis (a leaf's by
+//! its parent's `R / 65534`), a radiance by a part in 65535 of its
+//! brightest channel. Decoding is `+ − ×` on `f32` alone, the same on every
+//! path, so a compact tree's images are as deterministic as a full one's.
 
 use glam::Vec3;
 
-use super::{Cluster, FACETS, FacetPlanes, NodeArrays, NodeId, SplatRecord, Tree, field};
+use super::bound::disks_area;
+use super::{Cluster, FACETS, FacetPlanes, LEAF, LEAF_BIT, NodeArrays, NodeId, SplatRecord, Tree, field};
+use crate::points::Surfel;
 
 /// How a tree stores what splatting reads of its nodes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Precision {
-    /// `f32` fields: 80 bytes a node.
+    /// `f32` fields: 80 bytes a node, and 260 a mixed node's facets.
     #[default]
     Full,
-    /// Quantized against each node's bounding sphere: 32 bytes a node.
+    /// Quantized against each node's bounding sphere: 32 bytes an inner
+    /// node, 12 a leaf, 88 a mixed node's facets.
     Compact,
 }
 
@@ -153,7 +159,53 @@ impl PackedSplat {
     }
 }
 
-/// A mixed node's facets ([`Cluster`]) in 88 bytes, where they take 156
+/// A leaf's splat record: its area and radiance, in 12 bytes. The rest is
+/// its surfel's disk as its pair record holds it (centre, and normal as the
+/// cone's axis), so a leaf costs no splat record of 32 bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct PackedLeaf {
+    area: f32,
+    radiance: [u16; 3],
+    exponent: u8,
+}
+
+impl PackedLeaf {
+    /// The leaf of surfel `s`.
+    pub(crate) fn of(s: &Surfel) -> PackedLeaf {
+        let (radiance, exponent) = pack_radiance(s.radiance);
+        let r = s.radius as f64;
+        PackedLeaf {
+            area: disks_area(r * r),
+            radiance,
+            exponent,
+        }
+    }
+
+    /// The leaf's splat record, of its node's test fields `f`.
+    #[inline(always)]
+    fn unpack(&self, f: [f32; field::COUNT]) -> SplatRecord {
+        let (rise, lift, radius) = SplatRecord::bounds(LEAF, self.area, f[field::R], f[field::SIN]);
+        let centroid = [f[field::CX], f[field::CY], f[field::CZ]];
+        SplatRecord {
+            centroid,
+            area: self.area,
+            normal: [f[field::AX], f[field::AY], f[field::AZ]],
+            kind: LEAF,
+            light_centroid: centroid,
+            rise,
+            lift,
+            radius,
+            shifted: false,
+        }
+    }
+
+    #[inline(always)]
+    fn radiance(&self) -> Vec3 {
+        unpack_radiance(self.radiance, self.exponent)
+    }
+}
+
+/// A mixed node's facets ([`Cluster`]) in 88 bytes, where they take 160
 /// (and 100 more for what the microbuffer derives of them, which a compact
 /// tree derives where it reads them). Per facet: its unit mean normal in
 /// steps of `1 / 32767` and the length of `A·n̄ / A_node` in steps of
@@ -279,14 +331,20 @@ impl Facets {
     }
 }
 
-/// The splat records and radiance of every node, indexed by node.
+/// The splat records and radiance of every node.
 #[derive(Clone, Debug)]
 pub(crate) enum Payload {
+    /// Indexed by node.
     Full {
         splat: Vec<SplatRecord>,
         radiance: Vec<Vec3>,
     },
-    Compact(Vec<PackedSplat>),
+    /// An inner node's indexed by its child link (the pair record of its
+    /// children; record 0's is unused), a leaf's by its surfel.
+    Compact {
+        inner: Vec<PackedSplat>,
+        leaves: Vec<PackedLeaf>,
+    },
 }
 
 impl Default for Payload {
@@ -352,7 +410,21 @@ impl Tree {
         let k = node as usize;
         match &self.payload {
             Payload::Full { splat, .. } => splat.get(k).copied(),
-            Payload::Compact(packed) => Some(self.unpack(packed.get(k)?, node).0),
+            Payload::Compact { inner, leaves } => {
+                if k >= self.len() {
+                    return None;
+                }
+                let link = self.nodes.child(node);
+                if link & LEAF_BIT != 0 {
+                    Some(
+                        leaves
+                            .get((link & !LEAF_BIT) as usize)?
+                            .unpack(self.nodes.fields(node)),
+                    )
+                } else {
+                    Some(self.unpack(inner.get(link as usize)?, node).0)
+                }
+            }
         }
     }
 
@@ -369,7 +441,14 @@ impl Tree {
     pub fn radiance(&self, node: NodeId) -> Vec3 {
         match &self.payload {
             Payload::Full { radiance, .. } => radiance[node as usize],
-            Payload::Compact(packed) => packed[node as usize].radiance(),
+            Payload::Compact { inner, leaves } => {
+                let link = self.nodes.child(node);
+                if link & LEAF_BIT != 0 {
+                    leaves[(link & !LEAF_BIT) as usize].radiance()
+                } else {
+                    inner[link as usize].radiance()
+                }
+            }
         }
     }
 
@@ -388,8 +467,11 @@ impl Tree {
         match &self.facets {
             Facets::Full { planes, .. } => planes.get(i).copied(),
             Facets::Compact(packed) => {
+                // A mixed node is an inner one.
                 let (rec, r) = match &self.payload {
-                    Payload::Compact(splat) => self.unpack(splat.get(node as usize)?, node),
+                    Payload::Compact { inner, .. } => {
+                        self.unpack(inner.get(self.nodes.child(node) as usize)?, node)
+                    }
                     Payload::Full { splat, .. } => {
                         (*splat.get(node as usize)?, self.nodes.get(node, field::R))
                     }
@@ -404,11 +486,12 @@ impl Tree {
         self.facets.bytes()
     }
 
-    /// Bytes of payload per node.
+    /// Bytes of payload, all nodes'.
     pub(crate) fn payload_bytes(&self) -> usize {
+        use std::mem::size_of_val;
         match &self.payload {
-            Payload::Full { .. } => std::mem::size_of::<SplatRecord>() + std::mem::size_of::<Vec3>(),
-            Payload::Compact(_) => std::mem::size_of::<PackedSplat>(),
+            Payload::Full { splat, radiance } => size_of_val(&splat[..]) + size_of_val(&radiance[..]),
+            Payload::Compact { inner, leaves } => size_of_val(&inner[..]) + size_of_val(&leaves[..]),
         }
     }
 }
