@@ -163,7 +163,7 @@ impl MicroBuffer {
     /// Where the node `rec` falls; `None` for a node that cannot show: at
     /// the receiver's position, facing away, or straight below.
     #[inline(always)]
-    pub(super) fn locate(&self, rec: &SplatRecord, light: &NodeLight) -> Option<Located<f32>> {
+    pub(super) fn locate(&self, rec: &SplatRecord, light: &NodeLight<'_>) -> Option<Located<f32>> {
         let l = locate(&NodeSplat::of(rec), light, &self.frame_lanes(), self.half_n());
         l.valid.then_some(l)
     }

@@ -456,7 +456,7 @@ fn brightest_of(tree: &Tree, node: u32) -> Vec3 {
     } else {
         Vec3::ZERO
     };
-    if let Some(f) = tree.cluster_of(node) {
+    if let Some(f) = tree.cluster_of(node).map(|c| c.get()) {
         for g in &f.facet {
             b = b.max(Vec3::new(g[3], g[4], g[5]));
         }

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::simd::{F32s, Real};
-use crate::tree::{Cluster, MIXED, NodeId, PLANAR, SplatRecord, Tree};
+use crate::tree::{ClusterRef, MIXED, NodeId, PLANAR, SplatRecord, Tree};
 
 /// What splatting reads of a node, for one node or one per lane.
 #[derive(Clone, Copy)]
@@ -61,10 +61,10 @@ impl NodeSplat<f32> {
 /// What a node shows besides its geometry: its kind, its mean radiance and
 /// its light by direction (read for a [`MIXED`] node only).
 #[derive(Clone, Copy)]
-pub(crate) struct NodeLight {
+pub(crate) struct NodeLight<'a> {
     pub kind: u32,
     pub radiance: Vec3,
-    pub cluster: Cluster,
+    pub cluster: ClusterRef<'a>,
     /// Its [`SplatRecord`]'s bounds: `rise·s + lift`, `R`, and whether
     /// its light centroid is not its area centroid.
     pub rise: f32,
@@ -73,14 +73,14 @@ pub(crate) struct NodeLight {
     pub shifted: bool,
 }
 
-impl NodeLight {
+impl NodeLight<'static> {
     /// A node of one mean normal showing `radiance` (`kind`: planar or leaf).
     #[cfg(test)]
     pub(crate) fn flat(kind: u32, radiance: Vec3) -> Self {
         NodeLight {
             kind,
             radiance,
-            cluster: Cluster::NONE,
+            cluster: ClusterRef::NONE,
             rise: 0.0,
             lift: f32::INFINITY,
             radius: 0.0,
@@ -89,12 +89,12 @@ impl NodeLight {
     }
 }
 
-impl NodeLight {
+impl<'a> NodeLight<'a> {
     /// Node `node` of `tree` (`None` if it is not one).
     #[inline(always)]
-    pub(crate) fn of(tree: &Tree, node: NodeId) -> Option<(SplatRecord, Self)> {
+    pub(crate) fn of(tree: &'a Tree, node: NodeId) -> Option<(SplatRecord, Self)> {
         let rec = tree.splat_record(node)?;
-        let cluster = tree.cluster_of(node).unwrap_or(Cluster::NONE);
+        let cluster = tree.cluster_of(node).unwrap_or(ClusterRef::NONE);
         Some((
             rec,
             NodeLight {
@@ -228,7 +228,12 @@ fn near_field<V: Real>(area: V, m: [V; 3], w: [V; 3], l2: V, n: [V; 3]) -> V {
 /// it); `Ω` is capped at 2π. Invalid: the centre at the receiver, a
 /// non-finite distance or `Ω`, a node facing away, a centre straight below.
 #[inline(always)]
-pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLanes<V>, half: V) -> Located<V> {
+pub(crate) fn locate<V: Real>(
+    s: &NodeSplat<V>,
+    light: &NodeLight<'_>,
+    f: &FrameLanes<V>,
+    half: V,
+) -> Located<V> {
     let vx = s.cx - f.px;
     let vy = s.cy - f.py;
     let vz = s.cz - f.pz;
@@ -242,7 +247,8 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLane
     // facet's `G` at its own area centroid (times its share of the area).
     let mut facing = [zero; 3];
     let mut at_facet = [zero; 3];
-    let (raw, radiance, sent_at_facets) = if light.kind == MIXED {
+    let cluster = (light.kind == MIXED).then(|| light.cluster.get());
+    let (raw, radiance, sent_at_facets) = if let Some(cluster) = &cluster {
         // Each facet's `A·max(0, −n̄·ω)` as a fraction of the node's area (at
         // most 1, so `L·w` cannot overflow), and its radiance weighted by its
         // share `w / Σw` of what the facets send (a share, not `w`: `L·w`
@@ -260,7 +266,7 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLane
         for ((w, g), (f, c)) in facing
             .iter_mut()
             .zip(at_facet.iter_mut())
-            .zip(light.cluster.facet.iter().zip(&light.cluster.plane))
+            .zip(cluster.facet.iter().zip(&cluster.plane))
         {
             let m = [V::splat(f[0]), V::splat(f[1]), V::splat(f[2])];
             let facing = -(m[0] * dx + m[1] * dy + m[2] * dz);
@@ -282,7 +288,7 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLane
         // and `0·∞` is NaN.
         let sum = V::select(sends, total, V::select(zero.lt(area), area, V::splat(1.0)));
         let mut power = [zero; 3];
-        for ((w, g), f) in facing.iter().zip(&at_facet).zip(&light.cluster.facet) {
+        for ((w, g), f) in facing.iter().zip(&at_facet).zip(&cluster.facet) {
             let share = V::select(sends, *g, *w) / sum;
             power = [
                 power[0] + V::splat(f[3]) * share,
@@ -327,9 +333,9 @@ pub(crate) fn locate<V: Real>(s: &NodeSplat<V>, light: &NodeLight, f: &FrameLane
         // error in where the light lies. At most `SHIFT` (where `G(c)`
         // nears 0 at the horizon).
         let (mut at_l, mut at_c) = (zero, zero);
-        if light.kind == MIXED {
+        if let Some(cluster) = &cluster {
             let r = V::splat(light.radius);
-            for ((g, off), at) in light.cluster.facet.iter().zip(&light.cluster.light).zip(at_facet) {
+            for ((g, off), at) in cluster.facet.iter().zip(&cluster.light).zip(at_facet) {
                 let (m, bright) = (
                     [V::splat(g[0]), V::splat(g[1]), V::splat(g[2])],
                     V::splat(g[3] + g[4] + g[5]),

@@ -10,7 +10,7 @@ use crate::rng::Rng;
 use crate::tree::{LEAF, NodeId, PLANAR, SplatRecord};
 
 /// The light of the test nodes: one normal, radiance one.
-fn flat(rec: &SplatRecord) -> NodeLight {
+fn flat(rec: &SplatRecord) -> NodeLight<'static> {
     NodeLight::flat(rec.kind, Vec3::ONE)
 }
 

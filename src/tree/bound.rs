@@ -214,6 +214,7 @@ pub(crate) struct FacetPlanes {
 impl FacetPlanes {
     /// The facets of the mixed node `rec` with bounding radius `r` and
     /// facets `cluster`.
+    #[inline(always)]
     pub(crate) fn of(rec: &SplatRecord, r: f32, cluster: &Cluster) -> FacetPlanes {
         let mut shown = 0.0;
         for f in &cluster.facet {

@@ -71,6 +71,7 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
     }
     for (i, c) in (0..tree.facets.len())
         .filter_map(|i| tree.facets.get(i))
+        .map(|c| c.get())
         .enumerate()
     {
         let bad = c.facet.iter().any(|f| {

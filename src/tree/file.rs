@@ -285,7 +285,10 @@ impl TreeFile {
             s.centroid.iter().for_each(|&x| put_f32(&mut out, x));
             s.light_centroid.iter().for_each(|&x| put_f32(&mut out, x));
         }
-        for c in (0..tree.facets.len()).filter_map(|i| tree.facets.get(i)) {
+        for c in (0..tree.facets.len())
+            .filter_map(|i| tree.facets.get(i))
+            .map(|c| c.get())
+        {
             c.facet.iter().flatten().for_each(|&x| put_f32(&mut out, x));
             c.plane.iter().flatten().for_each(|&x| put_f32(&mut out, x));
             c.light.iter().flatten().for_each(|&x| put_f32(&mut out, x));

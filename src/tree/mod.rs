@@ -37,7 +37,7 @@ pub(crate) mod quantize;
 
 pub use file::{BakeRecord, TreeFile, TreeFileError};
 pub use payload::Precision;
-pub(crate) use payload::{Facets, PackedLeaf, Payload, Rank};
+pub(crate) use payload::{ClusterRef, Facets, PackedLeaf, Payload, Rank};
 pub(crate) use quantize::CompactPair;
 
 /// Index of a node in a [`Tree`].
@@ -425,7 +425,7 @@ impl Tree {
         let mut planes = Vec::new();
         for k in 0..self.len() as u32 {
             let (r, sin) = (self.nodes.get(k, field::R), self.nodes.get(k, field::SIN));
-            let c = self.cluster_of(k).unwrap_or(Cluster::NONE);
+            let c = self.cluster_of(k).map_or(Cluster::NONE, |c| c.get());
             if let Payload::Full { splat, .. } = &mut self.payload {
                 splat[k as usize].derive(r, sin, &c);
             }

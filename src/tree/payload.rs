@@ -267,6 +267,28 @@ impl PackedFacets {
     }
 }
 
+/// A mixed node's facets where the tree holds them, decoded where read:
+/// a reference, so what the microbuffer passes per splatted node stays
+/// small (most nodes have no facets).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum ClusterRef<'a> {
+    Whole(&'a Cluster),
+    Packed(&'a PackedFacets),
+}
+
+impl ClusterRef<'_> {
+    /// No facets: what a node that is not [`MIXED`](super::MIXED) reads.
+    pub(crate) const NONE: ClusterRef<'static> = ClusterRef::Whole(&Cluster::NONE);
+
+    #[inline(always)]
+    pub(crate) fn get(self) -> Cluster {
+        match self {
+            ClusterRef::Whole(c) => *c,
+            ClusterRef::Packed(p) => p.unpack(),
+        }
+    }
+}
+
 /// The nearest step of a facet's offset `x` (units of `R`, within ±2).
 fn facet_step(x: f64) -> i16 {
     (x * FACET_STEPS).round().clamp(-STEPS, STEPS) as i16
@@ -315,10 +337,10 @@ impl Facets {
 
     /// The facets of the `i`-th mixed node, if there is one.
     #[inline(always)]
-    pub(crate) fn get(&self, i: usize) -> Option<Cluster> {
+    pub(crate) fn get(&self, i: usize) -> Option<ClusterRef<'_>> {
         match self {
-            Facets::Full { cluster, .. } => cluster.get(i).copied(),
-            Facets::Compact(packed) => packed.get(i).map(PackedFacets::unpack),
+            Facets::Full { cluster, .. } => cluster.get(i).map(ClusterRef::Whole),
+            Facets::Compact(packed) => packed.get(i).map(ClusterRef::Packed),
         }
     }
 
@@ -437,7 +459,7 @@ impl Tree {
     }
 
     /// Area-weighted mean outgoing radiance below `node`.
-    #[inline]
+    #[inline(always)]
     pub fn radiance(&self, node: NodeId) -> Vec3 {
         match &self.payload {
             Payload::Full { radiance, .. } => radiance[node as usize],
@@ -454,7 +476,7 @@ impl Tree {
 
     /// The facets of node `node`, if it is [`MIXED`](super::MIXED).
     #[inline(always)]
-    pub(crate) fn cluster_of(&self, node: NodeId) -> Option<Cluster> {
+    pub(crate) fn cluster_of(&self, node: NodeId) -> Option<ClusterRef<'_>> {
         self.facets.get(self.mixed.get(node as usize)?)
     }
 
@@ -601,7 +623,8 @@ mod tests {
         let back = crate::TreeFile::from_bytes(&file.to_bytes()).expect("it reads back");
         assert_eq!(back.tree().precision(), Precision::Full);
         for k in 0..tree.len() as NodeId {
-            assert_eq!(back.tree().cluster_of(k), tree.cluster_of(k), "node {k}");
+            let facets = |t: &Tree| t.cluster_of(k).map(|c| c.get());
+            assert_eq!(facets(back.tree()), facets(&tree), "node {k}");
             assert_eq!(back.tree().planes_of(k), tree.planes_of(k), "node {k}");
         }
     }
