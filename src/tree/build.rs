@@ -5,7 +5,8 @@
 use glam::Vec3;
 
 use super::bound::BuildNode;
-use super::payload::{PackedFacets, PackedSplat};
+use super::facets::PackedFacets;
+use super::payload::PackedSplat;
 use super::quantize::{self, CompactPair};
 use super::{
     Cluster, LEAF, LEAF_BIT, MIXED, NodeArrays, PLANAR, PairRecord, Payload, SplatRecord, bound, field,

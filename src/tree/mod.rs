@@ -31,13 +31,15 @@ mod build;
 pub(crate) mod bytes;
 pub(crate) use bound::FacetPlanes;
 mod check;
+mod facets;
 pub mod file;
 mod payload;
 pub(crate) mod quantize;
 
+pub(crate) use facets::{ClusterRef, Facets};
 pub use file::{BakeRecord, TreeFile, TreeFileError};
 pub use payload::Precision;
-pub(crate) use payload::{ClusterRef, Facets, PackedLeaf, Payload, Rank};
+pub(crate) use payload::{PackedLeaf, Payload, Rank};
 pub(crate) use quantize::CompactPair;
 
 /// Index of a node in a [`Tree`].
