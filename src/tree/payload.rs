@@ -1,6 +1,6 @@
-//! What splatting reads of each node (its [`SplatRecord`] and radiance, and
-//! a mixed node's facets), stored whole or packed, and which node's facets
-//! a mixed node's are.
+//! What splatting reads of each node (its [`SplatRecord`] and radiance),
+//! stored whole or packed, and which node's facets a mixed node's are (its
+//! facets themselves are in `tree/facets.rs`).
 //!
 //! The packed form ([`Precision::Compact`]) quantizes against the node's own
 //! bounding sphere, as Buchholz and Boubekeur quantize a PBGI tree: both
