@@ -12,11 +12,16 @@ use pbgi::render::{Frame, RenderError, RenderOptions, bake_tree};
 use pbgi::scene::Scene;
 use pbgi::scene::builtin::cornell_box;
 use pbgi::tree::file::checksum;
-use pbgi::tree::{BakeRecord, TreeFile, TreeFileError};
+use pbgi::tree::{BakeRecord, Precision, TreeFile, TreeFileError};
 use pbgi::{CutOptions, PointCloud, Receiver, Scheme, Surfel, Traversal, Tree};
 
 /// A floor and a wall meeting at a corner, 8 surfels: mixed clusters.
 fn corner_file() -> TreeFile {
+    corner_file_at(Precision::Full)
+}
+
+/// [`corner_file`] with its tree at `precision`.
+fn corner_file_at(precision: Precision) -> TreeFile {
     let mut surfels = Vec::new();
     for i in 0..4 {
         let t = i as f32 * 0.25;
@@ -34,7 +39,7 @@ fn corner_file() -> TreeFile {
         });
     }
     let cloud = PointCloud::new(surfels).unwrap();
-    let tree = Tree::build(&cloud);
+    let tree = Tree::build_with(&cloud, precision);
     TreeFile::new(cloud, tree, BakeRecord::default()).unwrap()
 }
 
@@ -88,12 +93,15 @@ fn exercise(file: &TreeFile) {
 
 #[test]
 fn round_trip_gives_the_same_bytes_and_image() {
-    let file = corner_file();
-    let bytes = file.to_bytes();
-    let back = TreeFile::load(bytes.as_slice()).unwrap();
-    assert_eq!(back.to_bytes(), bytes);
-    assert_eq!(back.cloud(), file.cloud());
-    exercise(&back);
+    for precision in [Precision::Full, Precision::Compact] {
+        let file = corner_file_at(precision);
+        let bytes = file.to_bytes();
+        let back = TreeFile::load(bytes.as_slice()).unwrap();
+        assert_eq!(back.to_bytes(), bytes, "{precision:?}");
+        assert_eq!(back.cloud(), file.cloud());
+        assert_eq!(back.tree().precision(), precision);
+        exercise(&back);
+    }
 
     let scene = small_box();
     let mut sky = small_box();
@@ -111,6 +119,14 @@ fn round_trip_gives_the_same_bytes_and_image() {
         ("sky, one bounce", &sky, quick()),
         ("AO", &scene, RenderOptions { ao: true, ..quick() }),
         (
+            "compact, sky",
+            &sky,
+            RenderOptions {
+                tree_precision: Precision::Compact,
+                ..quick()
+            },
+        ),
+        (
             "direct only (empty tree)",
             &scene,
             RenderOptions {
@@ -125,6 +141,7 @@ fn round_trip_gives_the_same_bytes_and_image() {
         baked.save(&mut bytes).unwrap();
         let loaded = TreeFile::load(bytes.as_slice()).unwrap();
         assert_eq!(loaded.to_bytes(), bytes, "{name}: re-saved bytes differ");
+        assert_eq!(loaded.tree().precision(), opts.tree_precision, "{name}");
         let built = Frame::prepare(scene, &opts).unwrap().render(&|_, _| {}).unwrap();
         let frame = Frame::with_tree(scene, &opts, loaded).unwrap();
         let from_file = frame.render(&|_, _| {}).unwrap();
@@ -160,7 +177,7 @@ fn each_kind_of_damage_has_its_error() {
             e,
             TreeFileError::UnsupportedVersion {
                 found: 1,
-                supported: 3
+                supported: 4
             }
         ),
         "{e}"
@@ -252,12 +269,65 @@ fn each_kind_of_damage_has_its_error() {
     assert!(e.to_string().contains("surfel 3"), "{e}");
 }
 
+/// A compact tree's own checks: a record quantized against another sphere
+/// than its parent's, and bytes the tree would not write (padding, a light
+/// offset it does not derive), each refused at its place.
+#[test]
+fn a_compact_file_is_refused_where_it_is_not_as_built() {
+    let good = corner_file_at(Precision::Compact).to_bytes();
+    let load = |b: &[u8]| TreeFile::from_bytes(b).unwrap_err();
+    // The surfels end at 64 + 40·8 = 384, a multiple of 64: pair records
+    // from there, 64 bytes each. Record 1 (the root's children) has node
+    // 0's sphere as its base, in its first 16 bytes.
+    let (pairs, record) = (64 + 40 * 8, 64);
+    let mut b = good.clone();
+    b[pairs + record + 12..pairs + record + 16].copy_from_slice(&1.5f32.to_le_bytes());
+    fix_checksum(&mut b);
+    let e = load(&b);
+    assert!(
+        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == pairs),
+        "{e}"
+    );
+    assert!(e.to_string().contains("another sphere"), "{e}");
+
+    // Record 1's light offset, slot 0: after the base (16 bytes), the centre
+    // and axis steps (24) and the radius, cosine and sine (12).
+    let at = pairs + record + 16 + 24 + 12;
+    let mut b = good.clone();
+    b[at] ^= 0x40;
+    fix_checksum(&mut b);
+    let e = load(&b);
+    assert!(
+        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == at),
+        "{e}"
+    );
+    assert!(e.to_string().contains("written again"), "{e}");
+
+    // The padding of record 1's packed splat record (its last two bytes):
+    // the packed splat records follow the 8 pair records.
+    let at = pairs + 8 * record + 32 + 30;
+    let mut b = good.clone();
+    b[at] = 1;
+    fix_checksum(&mut b);
+    let e = load(&b);
+    assert!(
+        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == at),
+        "{e}"
+    );
+}
+
 /// Every prefix is an error (truncated, or bad magic), never a panic; every
 /// one-byte change with the checksum made right loads as an error, or as a
 /// tree the traversals and the gather run on without a panic.
 #[test]
 fn prefixes_and_byte_changes_never_panic() {
-    let good = corner_file().to_bytes();
+    for precision in [Precision::Full, Precision::Compact] {
+        prefixes_and_byte_changes_never_panic_at(precision);
+    }
+}
+
+fn prefixes_and_byte_changes_never_panic_at(precision: Precision) {
+    let good = corner_file_at(precision).to_bytes();
     for len in 0..good.len() {
         // Through `load` (a reader: header first, then the length it gives).
         let r = catch_unwind(|| TreeFile::load(&good[..len]));
@@ -290,7 +360,7 @@ fn prefixes_and_byte_changes_never_panic() {
             }
         }
     }
-    eprintln!("one-byte changes: {loaded} loaded and ran, {refused} refused");
+    eprintln!("{precision:?}: one-byte changes: {loaded} loaded and ran, {refused} refused");
     assert!(refused > 0 && loaded > 0);
 }
 

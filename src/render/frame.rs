@@ -30,7 +30,7 @@ use crate::gather::{Gather, Gatherer};
 use crate::microbuffer::{Convolution, MicroBuffer};
 use crate::scene::{Camera, Scene, SceneError};
 use crate::simd::LANES;
-use crate::tree::{Precision, Tree, TreeFile};
+use crate::tree::{Tree, TreeFile};
 
 /// One tile's pixels (index in the window, radiance), traversal counters
 /// and gathers (`Frame::render_tile`).
@@ -158,11 +158,12 @@ impl<'s> Frame<'s> {
                 check_record(file.bake(), &bake_record(scene, opts))?;
                 loaded_stages(opts, &file, &mut stages);
                 let (_, cloud, tree) = file.into_parts();
-                // The file holds full values: a compact tree is built from
-                // its surfels (the same tree a compact bake holds).
-                let tree = match opts.tree_precision {
-                    Precision::Compact => Tree::build_with(&cloud, Precision::Compact),
-                    Precision::Full => tree,
+                // A tree at the other precision is built from the surfels:
+                // the same tree a bake at this precision holds.
+                let tree = if tree.precision() == opts.tree_precision {
+                    tree
+                } else {
+                    Tree::build_with(&cloud, opts.tree_precision)
                 };
                 (tree, cloud.len())
             }

@@ -55,6 +55,19 @@ impl Reader<'_> {
     pub fn vec3(&mut self) -> Vec3 {
         Vec3::new(self.f32(), self.f32(), self.f32())
     }
+    pub fn u16(&mut self) -> u16 {
+        u16::from_le_bytes(self.take())
+    }
+    pub fn i16(&mut self) -> i16 {
+        i16::from_le_bytes(self.take())
+    }
+    pub fn u8(&mut self) -> u8 {
+        self.take::<1>()[0]
+    }
+    /// Skips `n` bytes (padding; the file's re-written form checks them).
+    pub fn skip(&mut self, n: usize) {
+        self.at += n;
+    }
 }
 
 pub(crate) fn put_u32(out: &mut Vec<u8>, v: u32) {
@@ -66,6 +79,14 @@ pub(crate) fn put_u64(out: &mut Vec<u8>, v: u64) {
 }
 
 pub(crate) fn put_f32(out: &mut Vec<u8>, v: f32) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+pub(crate) fn put_u16(out: &mut Vec<u8>, v: u16) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+pub(crate) fn put_i16(out: &mut Vec<u8>, v: i16) {
     out.extend_from_slice(&v.to_le_bytes());
 }
 

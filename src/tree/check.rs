@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{FACETS, LEAF, LEAF_BIT, MAX_DEPTH, MIXED, NodeArrays, NodeView, PLANAR, Tree};
+use super::{FACETS, LEAF, LEAF_BIT, MAX_DEPTH, MIXED, NodeArrays, NodeView, PLANAR, Tree, field};
 use crate::points::MAX_COORDINATE;
 
 /// Where a check failed.
@@ -94,6 +94,30 @@ pub(crate) fn values(tree: &Tree) -> Result<(), Fault> {
                     "cluster {i}: a facet's normal, radiance, plane or light centroid is out of range ({FACETS} facets)"
                 ),
             });
+        }
+    }
+    Ok(())
+}
+
+/// Each compact pair record below the root's decodes against its parent's
+/// decoded sphere, bit for bit, as the build writes it (so a node's sphere
+/// is quantized against the one that holds it). Nothing to check in a full
+/// tree. Run after [`structure`]: it indexes by the child links.
+pub(crate) fn bases(tree: &Tree) -> Result<(), Fault> {
+    let NodeArrays::Compact(pairs) = &tree.nodes else {
+        return Ok(());
+    };
+    for k in 0..tree.len() as u32 {
+        let child = tree.nodes.child(k);
+        if child & LEAF_BIT == 0 {
+            let f = tree.nodes.fields(k);
+            let sphere = [f[field::CX], f[field::CY], f[field::CZ], f[field::R]];
+            if pairs[child as usize].base.map(f32::to_bits) != sphere.map(f32::to_bits) {
+                return Err(at(
+                    k,
+                    format!("its children's record {child} decodes against another sphere than the node's"),
+                ));
+            }
         }
     }
     Ok(())

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::bytes::{Reader, put_i16, put_u16};
 use super::payload::{MANTISSA, Payload, STEPS, pack_radiance, step, unpack_radiance};
 use super::{Cluster, FACETS, FacetPlanes, NodeId, Precision, Tree, field};
 
@@ -17,6 +18,7 @@ use super::{Cluster, FACETS, FacetPlanes, NodeId, Precision, Tree, field};
 /// them). The plane's and the light's offsets share their steps, so a facet
 /// whose light is at its centroid still is.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub(crate) struct PackedFacets {
     normal: [[i16; 3]; FACETS],
     shown: [u16; FACETS],
@@ -67,7 +69,40 @@ impl PackedFacets {
         }
         c
     }
+
+    /// Bytes of one mixed node's facets in a tree file: their memory image,
+    /// little-endian, padding zero.
+    pub(crate) const BYTES: usize = 88;
+
+    /// Appends the facets' bytes (in field order, as `repr(C)` lays them out:
+    /// one byte of padding after the exponents).
+    pub(crate) fn put(&self, out: &mut Vec<u8>) {
+        self.normal.iter().flatten().for_each(|&v| put_i16(out, v));
+        self.shown.iter().for_each(|&v| put_u16(out, v));
+        self.radiance.iter().flatten().for_each(|&v| put_u16(out, v));
+        out.extend_from_slice(&self.exponent);
+        out.push(0);
+        self.plane.iter().flatten().for_each(|&v| put_i16(out, v));
+        self.lift.iter().for_each(|&v| put_u16(out, v));
+        self.light.iter().flatten().for_each(|&v| put_i16(out, v));
+    }
+
+    /// Reads facets [`put`](Self::put) wrote.
+    pub(crate) fn get(rd: &mut Reader) -> PackedFacets {
+        let mut p = PackedFacets::default();
+        p.normal.iter_mut().flatten().for_each(|v| *v = rd.i16());
+        p.shown.iter_mut().for_each(|v| *v = rd.u16());
+        p.radiance.iter_mut().flatten().for_each(|v| *v = rd.u16());
+        p.exponent.iter_mut().for_each(|v| *v = rd.u8());
+        rd.skip(1);
+        p.plane.iter_mut().flatten().for_each(|v| *v = rd.i16());
+        p.lift.iter_mut().for_each(|v| *v = rd.u16());
+        p.light.iter_mut().flatten().for_each(|v| *v = rd.i16());
+        p
+    }
 }
+
+const _: () = assert!(std::mem::size_of::<PackedFacets>() == PackedFacets::BYTES);
 
 /// A mixed node's facets where the tree holds them, decoded where read:
 /// a reference, so what the microbuffer passes per splatted node stays
@@ -273,8 +308,8 @@ mod tests {
         }
     }
 
-    /// A compact tree in a file reads back to the facets and the planes it
-    /// derives, bit for bit (a file holds what a compact tree decodes).
+    /// A compact tree in a file reads back as a compact tree, to the facets
+    /// and the planes it derives, bit for bit.
     #[test]
     fn compact_facets_read_back_from_a_file() {
         let cloud = crate::synthetic::box_with_blocks(3000, 5);
@@ -282,7 +317,7 @@ mod tests {
         assert!(tree.facets.len() > 10, "{} mixed nodes", tree.facets.len());
         let file = crate::TreeFile::new(cloud, tree.clone(), Default::default()).expect("a built tree");
         let back = crate::TreeFile::from_bytes(&file.to_bytes()).expect("it reads back");
-        assert_eq!(back.tree().precision(), Precision::Full);
+        assert_eq!(back.tree().precision(), Precision::Compact);
         for k in 0..tree.len() as NodeId {
             let facets = |t: &Tree| t.cluster_of(k).map(|c| c.get());
             assert_eq!(facets(back.tree()), facets(&tree), "node {k}");

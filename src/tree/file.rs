@@ -7,12 +7,13 @@
 //! | offset | size | field |
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `PBGITREE` |
-//! | 8 | 4 | format version ([`VERSION`]) |
+//! | 8 | 4 | format version: [`VERSION`] for a full tree, [`COMPACT_VERSION`] for a compact one |
 //! | 12 | 40 | [`BakeRecord`]: scene hash u64, seed u64, density f32, light samples u32, bounces u32, flags u32 (bit 0 AO, bit 1 gathered), Ω f32, microbuffer u32 |
 //! | 52 | 12 | counts: surfels `n`, clusters (facets of the mixed nodes), tree depth (u32 each) |
 //! | 64 | 40 n | surfels: position, normal, radius, radiance |
-//! | | 96 (2n − 1) | nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance, area centroid, light centroid |
-//! | | 156 per cluster | facets: 3 × (area-weighted normal, radiance), then 3 × (the facet's centroid less the node's area centroid, reach), then 3 × (the facet's light centroid less the node's area centroid), in units of the node's radius |
+//! | | | a compact tree: its arrays as they lie in memory (see below) |
+//! | | 96 (2n − 1) | a full tree's nodes: centre, radius, cone axis, cos, sin, child, area, mean normal, kind, radiance, area centroid, light centroid |
+//! | | 156 per cluster | a full tree's facets: 3 × (area-weighted normal, radiance), then 3 × (the facet's centroid less the node's area centroid, reach), then 3 × (the facet's light centroid less the node's area centroid), in units of the node's radius |
 //! | end − 8 | 8 | FNV-1a 64 of every byte before it |
 //!
 //! A reader checks, in this order, the magic, the version, the counts
@@ -21,6 +22,13 @@
 //! it out (child links in range, each pair used once, every surfel in one
 //! leaf, the depth within [`MAX_DEPTH`](super::MAX_DEPTH)) and every value finite and in range,
 //! because the kernels index with the child links unchecked.
+//!
+//! A compact tree ([`Precision::Compact`](super::Precision)) is written as
+//! it lies in memory, each array in one piece, from a multiple of 64 bytes
+//! on: 64 bytes a pair record, 32 an inner node's packed splat record, 12 a
+//! leaf, 88 a mixed node's facets. Its reader checks the same, and also that
+//! each record is quantized against its parent's decoded sphere and that
+//! the tree written again gives the file's bytes.
 
 use std::fmt;
 use std::io::{Read, Write};
@@ -28,13 +36,15 @@ use std::io::{Read, Write};
 pub use super::bytes::{Fnv1a, checksum};
 use super::bytes::{Reader, put_f32, put_u32, put_u64};
 use super::check::{self, Place};
-use super::{Cluster, MIXED, NodeArrays, PairRecord, SplatRecord, Tree, field};
+use super::{Cluster, MIXED, NodeArrays, PairRecord, Precision, SplatRecord, Tree, compact_file, field};
 use crate::points::{PointCloud, Surfel};
 
 /// The first eight bytes of a tree file.
 pub const MAGIC: [u8; 8] = *b"PBGITREE";
-/// The format version this library reads and writes.
+/// The format version of a full tree, which this library reads and writes.
 pub const VERSION: u32 = 3;
+/// The format version of a compact tree, which this library reads and writes.
+pub const COMPACT_VERSION: u32 = 4;
 
 const HEADER: usize = 64;
 const SURFEL: usize = 40;
@@ -126,7 +136,7 @@ pub enum TreeFileError {
     UnsupportedVersion {
         /// The file's version.
         found: u32,
-        /// The one read here ([`VERSION`]).
+        /// The newest read here ([`COMPACT_VERSION`]; [`VERSION`] too).
         supported: u32,
     },
     /// Bytes after the checksum, from `offset` on.
@@ -170,7 +180,7 @@ impl fmt::Display for TreeFileError {
             ),
             TreeFileError::UnsupportedVersion { found, supported } => write!(
                 f,
-                "tree file format version {found} at byte 8, this pbgi reads version {supported}: bake it again"
+                "tree file format version {found} at byte 8, this pbgi reads versions {VERSION} to {supported}: bake it again"
             ),
             TreeFileError::TrailingBytes { offset } => {
                 write!(f, "tree file continues past its end at byte {offset}")
@@ -245,11 +255,15 @@ impl TreeFile {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let (tree, n) = (&self.tree, self.cloud.len());
-        let size = HEADER + SURFEL * n + NODE * tree.len() + CLUSTER * tree.facets.len() + CHECKSUM;
+        let version = match tree.precision() {
+            Precision::Full => VERSION,
+            Precision::Compact => COMPACT_VERSION,
+        };
+        let size = file_len(version, n as u64, tree.facets.len() as u64) as usize;
         let mut out = Vec::with_capacity(size);
         let b = &self.bake;
         out.extend_from_slice(&MAGIC);
-        put_u32(&mut out, VERSION);
+        put_u32(&mut out, version);
         put_u64(&mut out, b.scene);
         put_u64(&mut out, b.seed);
         put_f32(&mut out, b.density);
@@ -271,7 +285,10 @@ impl TreeFile {
             put_f32(&mut out, s.radius);
             s.radiance.to_array().iter().for_each(|&x| put_f32(&mut out, x));
         }
-        for k in 0..tree.len() as u32 {
+        if version == COMPACT_VERSION {
+            compact_file::put(tree, &mut out);
+        }
+        for k in (0..tree.len() as u32).filter(|_| version == VERSION) {
             (0..field::STORED).for_each(|j| put_f32(&mut out, tree.nodes.get(k, j)));
             put_u32(&mut out, tree.nodes.child(k));
             let s = tree.splat_record(k).expect("k < len");
@@ -286,6 +303,7 @@ impl TreeFile {
             s.light_centroid.iter().for_each(|&x| put_f32(&mut out, x));
         }
         for c in (0..tree.facets.len())
+            .filter(|_| version == VERSION)
             .filter_map(|i| tree.facets.get(i))
             .map(|c| c.get())
         {
@@ -311,8 +329,11 @@ impl TreeFile {
             .take(HEADER as u64)
             .read_to_end(&mut bytes)
             .map_err(io)?;
-        if bytes.len() == HEADER && bytes[..8] == MAGIC && bytes[8..12] == VERSION.to_le_bytes() {
-            let more = file_len(&bytes) - HEADER as u64 + 1;
+        let version = (bytes.len() == HEADER && bytes[..8] == MAGIC)
+            .then(|| u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes")))
+            .filter(|v| [VERSION, COMPACT_VERSION].contains(v));
+        if let Some(version) = version {
+            let more = header_file_len(version, &bytes) - HEADER as u64 + 1;
             r.take(more).read_to_end(&mut bytes).map_err(io)?;
         }
         Self::from_bytes(&bytes)
@@ -340,10 +361,10 @@ impl TreeFile {
         }
         let mut rd = Reader { bytes, at: 8 };
         let version = rd.u32();
-        if version != VERSION {
+        if ![VERSION, COMPACT_VERSION].contains(&version) {
             return Err(TreeFileError::UnsupportedVersion {
                 found: version,
-                supported: VERSION,
+                supported: COMPACT_VERSION,
             });
         }
         if bytes.len() < HEADER {
@@ -362,7 +383,7 @@ impl TreeFile {
         let microbuffer = rd.u32();
         let (n, clusters, depth) = (rd.u32() as u64, rd.u32() as u64, rd.u32());
         let nodes = (2 * n).saturating_sub(1);
-        let needed = file_len(bytes);
+        let needed = header_file_len(version, bytes);
         if len < needed {
             return Err(TreeFileError::Truncated { offset: len, needed });
         }
@@ -417,6 +438,11 @@ impl TreeFile {
             e => invalid(HEADER, e.to_string()),
         })?;
 
+        if version == COMPACT_VERSION {
+            let tree = compact_file::get(&bytes[..end], rd.at, n as usize, clusters as usize, depth)
+                .map_err(|(offset, what)| TreeFileError::Invalid { offset, what })?;
+            return Ok(TreeFile { bake, cloud, tree });
+        }
         let nodes_at = rd.at;
         let mut tree = Tree {
             depth,
@@ -489,15 +515,23 @@ impl TreeFile {
     }
 }
 
-/// The length a file of this header (at least [`HEADER`] bytes) has.
-fn file_len(header: &[u8]) -> u64 {
+/// The length a file of this header (at least [`HEADER`] bytes) and
+/// version has.
+fn header_file_len(version: u32, header: &[u8]) -> u64 {
     let count = |at: usize| {
         u64::from(u32::from_le_bytes(
             header[at..at + 4].try_into().expect("4 bytes"),
         ))
     };
-    let (n, clusters) = (count(52), count(56));
-    // At most 2^32 · 184 bytes: no overflow in u64.
-    (HEADER + CHECKSUM) as u64 + (SURFEL + 2 * NODE) as u64 * n - if n > 0 { NODE as u64 } else { 0 }
-        + CLUSTER as u64 * clusters
+    file_len(version, count(52), count(56))
+}
+
+/// The length of a file of `version` with `n` surfels and `clusters`
+/// mixed nodes: at most 2^32 · 300 bytes, no overflow in u64.
+fn file_len(version: u32, n: u64, clusters: u64) -> u64 {
+    let surfels_end = HEADER as u64 + SURFEL as u64 * n;
+    if version == COMPACT_VERSION {
+        return compact_file::Sections::of(surfels_end, n, clusters).end + CHECKSUM as u64;
+    }
+    surfels_end + CHECKSUM as u64 + NODE as u64 * (2 * n).saturating_sub(1) + CLUSTER as u64 * clusters
 }

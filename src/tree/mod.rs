@@ -31,6 +31,7 @@ mod build;
 pub(crate) mod bytes;
 pub(crate) use bound::FacetPlanes;
 mod check;
+mod compact_file;
 mod facets;
 pub mod file;
 mod payload;
@@ -393,6 +394,7 @@ impl Tree {
             return Tree {
                 nodes: pairs,
                 payload,
+                facets: Facets::new(Vec::new(), precision),
                 ..Tree::default()
             };
         }
@@ -427,7 +429,12 @@ impl Tree {
         let mut planes = Vec::new();
         for k in 0..self.len() as u32 {
             let (r, sin) = (self.nodes.get(k, field::R), self.nodes.get(k, field::SIN));
-            let c = self.cluster_of(k).map_or(Cluster::NONE, |c| c.get());
+            // Only a full tree derives anything of the facets here.
+            let full = matches!(self.facets, Facets::Full { .. });
+            let c = match self.cluster_of(k) {
+                Some(c) if full => c.get(),
+                _ => Cluster::NONE,
+            };
             if let Payload::Full { splat, .. } = &mut self.payload {
                 splat[k as usize].derive(r, sin, &c);
             }

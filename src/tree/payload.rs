@@ -19,6 +19,7 @@
 use glam::Vec3;
 
 use super::bound::disks_area;
+use super::bytes::{Reader, put_f32, put_i16, put_u16};
 use super::{Cluster, LEAF, LEAF_BIT, NodeArrays, NodeId, SplatRecord, Tree, field};
 use crate::points::Surfel;
 
@@ -157,12 +158,42 @@ impl PackedSplat {
     pub(crate) fn radiance(&self) -> Vec3 {
         unpack_radiance(self.radiance, self.exponent)
     }
+
+    /// Bytes of one record in a tree file: its memory image, little-endian,
+    /// padding zero.
+    pub(crate) const BYTES: usize = 32;
+
+    /// Appends the record's bytes.
+    pub(crate) fn put(&self, out: &mut Vec<u8>) {
+        put_f32(out, self.area);
+        for v in self.centroid.iter().chain(&self.light).chain(&self.normal) {
+            put_i16(out, *v);
+        }
+        self.radiance.iter().for_each(|&v| put_u16(out, v));
+        out.extend_from_slice(&[self.exponent, self.kind, 0, 0]);
+    }
+
+    /// Reads a record [`put`](Self::put) wrote.
+    pub(crate) fn get(rd: &mut Reader) -> PackedSplat {
+        let mut p = PackedSplat {
+            area: rd.f32(),
+            ..PackedSplat::default()
+        };
+        for v in p.centroid.iter_mut().chain(&mut p.light).chain(&mut p.normal) {
+            *v = rd.i16();
+        }
+        p.radiance.iter_mut().for_each(|v| *v = rd.u16());
+        (p.exponent, p.kind) = (rd.u8(), rd.u8());
+        rd.skip(2);
+        p
+    }
 }
 
 /// A leaf's splat record: its area and radiance, in 12 bytes. The rest is
 /// its surfel's disk as its pair record holds it (centre, and normal as the
 /// cone's axis), so a leaf costs no splat record of 32 bytes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub(crate) struct PackedLeaf {
     area: f32,
     radiance: [u16; 3],
@@ -203,7 +234,34 @@ impl PackedLeaf {
     fn radiance(&self) -> Vec3 {
         unpack_radiance(self.radiance, self.exponent)
     }
+
+    /// Bytes of one leaf in a tree file: its memory image, little-endian,
+    /// padding zero.
+    pub(crate) const BYTES: usize = 12;
+
+    /// Appends the leaf's bytes.
+    pub(crate) fn put(&self, out: &mut Vec<u8>) {
+        put_f32(out, self.area);
+        self.radiance.iter().for_each(|&v| put_u16(out, v));
+        out.extend_from_slice(&[self.exponent, 0]);
+    }
+
+    /// Reads a leaf [`put`](Self::put) wrote.
+    pub(crate) fn get(rd: &mut Reader) -> PackedLeaf {
+        let area = rd.f32();
+        let radiance = [rd.u16(), rd.u16(), rd.u16()];
+        let exponent = rd.u8();
+        rd.skip(1);
+        PackedLeaf {
+            area,
+            radiance,
+            exponent,
+        }
+    }
 }
+
+const _: () = assert!(std::mem::size_of::<PackedSplat>() == PackedSplat::BYTES);
+const _: () = assert!(std::mem::size_of::<PackedLeaf>() == PackedLeaf::BYTES);
 
 /// The splat records and radiance of every node.
 #[derive(Clone, Debug)]

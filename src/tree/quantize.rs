@@ -23,6 +23,7 @@
 
 use glam::Vec3;
 
+use super::bytes::{Reader, put_f32, put_i16, put_u16, put_u32};
 use crate::points::Surfel;
 use crate::simd::Real;
 
@@ -32,6 +33,8 @@ const OFFSET: f32 = 32767.0;
 const RADIUS: f32 = 16384.0;
 /// Cosine and sine steps per unit.
 const ANGLE: f32 = 65535.0;
+
+const _: () = assert!(std::mem::size_of::<CompactPair>() == CompactPair::BYTES);
 
 /// Two sibling nodes' test fields against their parent's sphere (see the
 /// module's notes): per field, one value per slot.
@@ -83,6 +86,41 @@ impl CompactPair {
     #[inline(always)]
     pub fn decoded(&self, slot: usize) -> [f32; 10] {
         decode(self.base, self.steps(slot))
+    }
+
+    /// Bytes of one record in a tree file: its memory image, little-endian.
+    pub const BYTES: usize = 64;
+
+    /// Appends the record's bytes (in field order, as `repr(C)` lays it out).
+    pub fn put(&self, out: &mut Vec<u8>) {
+        self.base.iter().for_each(|&x| put_f32(out, x));
+        for v in self.center.iter().chain(&self.axis).flatten() {
+            put_i16(out, *v);
+        }
+        for v in [self.radius, self.cos, self.sin, self.light_offset]
+            .iter()
+            .flatten()
+        {
+            put_u16(out, *v);
+        }
+        self.child.iter().for_each(|&c| put_u32(out, c));
+    }
+
+    /// Reads a record [`put`](Self::put) wrote.
+    pub fn get(rd: &mut Reader) -> CompactPair {
+        let mut p = CompactPair::default();
+        p.base.iter_mut().for_each(|x| *x = rd.f32());
+        for v in p.center.iter_mut().chain(&mut p.axis).flatten() {
+            *v = rd.i16();
+        }
+        for v in [&mut p.radius, &mut p.cos, &mut p.sin, &mut p.light_offset]
+            .into_iter()
+            .flatten()
+        {
+            *v = rd.u16();
+        }
+        p.child.iter_mut().for_each(|c| *c = rd.u32());
+        p
     }
 
     /// Stores node `q` in slot `slot`.
