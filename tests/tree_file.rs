@@ -298,10 +298,10 @@ fn a_compact_file_is_refused_where_it_is_not_as_built() {
     fix_checksum(&mut b);
     let e = load(&b);
     assert!(
-        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == at),
+        matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == pairs + record),
         "{e}"
     );
-    assert!(e.to_string().contains("written again"), "{e}");
+    assert!(e.to_string().contains("node 1: a light offset"), "{e}");
 
     // The padding of record 1's packed splat record (its last two bytes):
     // the packed splat records follow the 8 pair records.
@@ -314,6 +314,7 @@ fn a_compact_file_is_refused_where_it_is_not_as_built() {
         matches!(&e, TreeFileError::Invalid { offset, .. } if *offset as usize == at),
         "{e}"
     );
+    assert!(e.to_string().contains("written again"), "{e}");
 }
 
 /// Every prefix is an error (truncated, or bad magic), never a panic; every
@@ -420,4 +421,52 @@ fn a_tree_from_another_scene_or_settings_is_refused() {
     assert!(
         matches!(r, Err(RenderError::TreeMismatch { setting, .. }) if setting.starts_with("--microbuffer"))
     );
+}
+
+/// A compact tree file opened by its map is used in place, renders what
+/// the bytes read whole render, and keeps its tree when a new bake is
+/// written over its name; a file cut short on disk is refused as truncated.
+#[cfg(feature = "mmap")]
+#[test]
+fn a_mapped_compact_file_is_used_in_place_and_survives_a_new_bake() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("tree-file-map");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("box-{}.pbgi", std::process::id()));
+    let scene = small_box();
+    let opts = RenderOptions {
+        tree_precision: Precision::Compact,
+        ..quick()
+    };
+    let baked = bake_tree(&scene, &opts).unwrap();
+    baked.write_to(&path).unwrap();
+    let mapped = TreeFile::open(&path).unwrap();
+    assert!(mapped.tree().is_mapped() == cfg!(target_endian = "little"));
+    let read = TreeFile::from_bytes(&std::fs::read(&path).unwrap()).unwrap();
+    assert!(!read.tree().is_mapped());
+    assert_eq!(mapped.to_bytes(), read.to_bytes());
+    let render = |file: TreeFile| {
+        Frame::with_tree(&scene, &opts, file)
+            .unwrap()
+            .render(&|_, _| {})
+            .unwrap()
+            .image
+    };
+    let before = mapped.tree().clone();
+    let bytes = read.to_bytes();
+    assert_eq!(render(mapped), render(read), "mapped against read whole");
+
+    // A bake of another tree written over the name while one is mapped.
+    let held = TreeFile::open(&path).unwrap();
+    corner_file_at(Precision::Compact).write_to(&path).unwrap();
+    assert_eq!(held.to_bytes(), bytes, "the mapped tree changed under a new bake");
+    assert_eq!(
+        format!("{:?}", held.tree().node(3)),
+        format!("{:?}", before.node(3))
+    );
+
+    let cut = &std::fs::read(&path).unwrap()[..500];
+    std::fs::write(&path, cut).unwrap();
+    let e = TreeFile::open(&path).unwrap_err();
+    assert!(matches!(e, TreeFileError::Truncated { offset: 500, .. }), "{e}");
+    std::fs::remove_file(&path).unwrap();
 }

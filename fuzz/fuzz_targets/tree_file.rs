@@ -1,7 +1,9 @@
 //! The baked tree file reader (`pbgi::tree::TreeFile`): arbitrary bytes are
 //! a typed error or a tree, never a panic. Byte 0 is a switch: odd, the
 //! rest gets its checksum written again, so the fuzzer reaches the
-//! structure checks behind it. A tree that loads re-saves to the same bytes,
+//! structure checks behind it; with its top bit set, the bytes are written
+//! to a file and mapped (`TreeFile::open`, as `pbgi render --tree` reads a
+//! file), so a compact tree is used where it lies in the map. A tree that loads re-saves to the same bytes,
 //! and every scheme on every path this CPU runs gives the scalar cut on it
 //! (the cut invariants hold), and the gather shades it (irradiance,
 //! occlusion) without a panic: the kernels index by its child links
@@ -11,7 +13,7 @@
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
 use pbgi::gather::{Gather, GatherOptions};
-use pbgi::tree::TreeFile;
+use pbgi::tree::{TreeFile, TreeFileError};
 use pbgi::tree::file::checksum;
 use pbgi::{CutOptions, Isa, Receiver, Scheme, Traversal};
 
@@ -25,7 +27,12 @@ fuzz_target!(|data: &[u8]| {
         let sum = checksum(&bytes[..end]);
         bytes[end..].copy_from_slice(&sum.to_le_bytes());
     }
-    let Ok(file) = TreeFile::from_bytes(&bytes) else {
+    let loaded = if switch & 0x80 != 0 {
+        mapped(&bytes)
+    } else {
+        TreeFile::from_bytes(&bytes)
+    };
+    let Ok(file) = loaded else {
         return;
     };
     assert_eq!(file.to_bytes(), bytes, "a loaded file re-saves as read");
@@ -78,3 +85,13 @@ fuzz_target!(|data: &[u8]| {
     let _ = g.irradiance(&pairs);
     let _ = g.occlusion(&pairs);
 });
+
+/// `bytes` through a file and its map. The name goes at once; the map keeps
+/// the file for as long as the tree lives.
+fn mapped(bytes: &[u8]) -> Result<TreeFile, TreeFileError> {
+    let path = std::env::temp_dir().join(format!("pbgi-fuzz-tree-{}.pbgi", std::process::id()));
+    std::fs::write(&path, bytes).expect("a temporary file");
+    let file = TreeFile::open(&path);
+    std::fs::remove_file(&path).expect("the temporary file");
+    file
+}

@@ -35,7 +35,7 @@ impl<S: CutSink> Kernel for Run<'_, '_, S> {
         }
         match &t.tree.nodes {
             NodeArrays::Full(pairs) => run_on(t, pairs.as_slice(), scheme, receivers, sink, &mut stats),
-            NodeArrays::Compact(pairs) => run_on(t, pairs.as_slice(), scheme, receivers, sink, &mut stats),
+            NodeArrays::Compact(pairs) => run_on(t, &pairs[..], scheme, receivers, sink, &mut stats),
         }
         stats
     }

@@ -54,11 +54,11 @@ impl<'a> Out<'a> {
     ) -> Self {
         let pairs = match nodes {
             NodeArrays::Full(p) => PairsOut::Full(p),
-            NodeArrays::Compact(p) => PairsOut::Compact(p),
+            NodeArrays::Compact(p) => PairsOut::Compact(p.owned_mut()),
         };
         let payload = match payload {
             Payload::Full { splat, radiance } => PayloadOut::Full(splat, radiance),
-            Payload::Compact { inner, .. } => PayloadOut::Compact(inner),
+            Payload::Compact { inner, .. } => PayloadOut::Compact(inner.owned_mut()),
         };
         Out {
             pairs,

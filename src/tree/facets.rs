@@ -6,6 +6,7 @@ use glam::Vec3;
 
 use super::bytes::{Reader, put_i16, put_u16};
 use super::payload::{MANTISSA, Payload, STEPS, pack_radiance, step, unpack_radiance};
+use super::store::{Plain, Store};
 use super::{Cluster, FACETS, FacetPlanes, NodeId, Precision, Tree, field};
 
 /// A mixed node's facets ([`Cluster`]) in 88 bytes, where they take 160
@@ -102,6 +103,9 @@ impl PackedFacets {
     }
 }
 
+// SAFETY: `repr(C)`, integers and floats; `put` writes the memory image.
+unsafe impl Plain for PackedFacets {}
+
 const _: () = assert!(std::mem::size_of::<PackedFacets>() == PackedFacets::BYTES);
 
 /// A mixed node's facets where the tree holds them, decoded where read:
@@ -139,7 +143,7 @@ pub(crate) enum Facets {
         cluster: Vec<Cluster>,
         planes: Vec<FacetPlanes>,
     },
-    Compact(Vec<PackedFacets>),
+    Compact(Store<PackedFacets>),
 }
 
 impl Default for Facets {
@@ -160,7 +164,9 @@ impl Facets {
                 cluster,
                 planes: Vec::new(),
             },
-            Precision::Compact => Facets::Compact(cluster.iter().map(PackedFacets::pack).collect()),
+            Precision::Compact => {
+                Facets::Compact(cluster.iter().map(PackedFacets::pack).collect::<Vec<_>>().into())
+            }
         }
     }
 

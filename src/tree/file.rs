@@ -36,6 +36,7 @@ use std::io::{Read, Write};
 pub use super::bytes::{Fnv1a, checksum};
 use super::bytes::{Reader, put_f32, put_u32, put_u64};
 use super::check::{self, Place};
+use super::store::Map;
 use super::{Cluster, MIXED, NodeArrays, PairRecord, Precision, SplatRecord, Tree, compact_file, field};
 use crate::points::{PointCloud, Surfel};
 
@@ -341,6 +342,53 @@ impl TreeFile {
 
     /// [`load`](Self::load) from bytes in memory.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, TreeFileError> {
+        Self::read(bytes, None)
+    }
+
+    /// Maps the file at `path` into memory and checks it as
+    /// [`load`](Self::load) does. A compact tree's arrays are then used where
+    /// they lie in the file, so a render reads only the pages its cuts reach
+    /// (on a little-endian machine; elsewhere they are read as `load` reads
+    /// them). The surfels are read.
+    ///
+    /// The file must not be written in place while the tree is in use: pbgi
+    /// writes a tree file under a new name and renames it over the old one
+    /// ([`TreeFile::write_to`]), which leaves a mapped file as it was.
+    #[cfg(feature = "mmap")]
+    pub fn open(path: &std::path::Path) -> Result<Self, TreeFileError> {
+        let file = std::fs::File::open(path).map_err(TreeFileError::Io)?;
+        let meta = file.metadata().map_err(TreeFileError::Io)?;
+        if !meta.is_file() || meta.len() < HEADER as u64 {
+            // A device, a pipe, or too short to map usefully: read, as far
+            // as the header says, for the tree or the error `load` gives.
+            return Self::load(file);
+        }
+        // SAFETY: the map is only read, through the checks of `read` and
+        // then through `Store` (see tree/store.rs for why it stays sound).
+        let map = std::sync::Arc::new(unsafe { memmap2::Mmap::map(&file) }.map_err(TreeFileError::Io)?);
+        let tree = Self::read(&map[..], Some(&map))?;
+        // The checks read every page. Let them go from this process (they
+        // stay in the page cache), so what stays resident is what the
+        // render's cuts reach.
+        // SAFETY: a shared, read-only file map: dropping its pages only
+        // means reading them from the file again, the same bytes.
+        #[cfg(unix)]
+        let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+        Ok(tree)
+    }
+
+    /// Writes the file at `path` under a new name (`path` with `.part`
+    /// added) and renames it over `path`, so a render that has the old file
+    /// mapped keeps reading it as it was.
+    pub fn write_to(&self, path: &std::path::Path) -> std::io::Result<()> {
+        let mut part = path.as_os_str().to_owned();
+        part.push(".part");
+        std::fs::write(&part, self.to_bytes())?;
+        std::fs::rename(&part, path)
+    }
+
+    /// Reads and checks `bytes`, which lie in `map` when it is given.
+    fn read(bytes: &[u8], map: Option<&Map>) -> Result<Self, TreeFileError> {
         let len = bytes.len() as u64;
         if bytes.len() < MAGIC.len() || bytes[..8] != MAGIC {
             let head = &bytes[..bytes.len().min(8)];
@@ -439,7 +487,7 @@ impl TreeFile {
         })?;
 
         if version == COMPACT_VERSION {
-            let tree = compact_file::get(&bytes[..end], rd.at, n as usize, clusters as usize, depth)
+            let tree = compact_file::get(&bytes[..end], map, rd.at, n as usize, clusters as usize, depth)
                 .map_err(|(offset, what)| TreeFileError::Invalid { offset, what })?;
             return Ok(TreeFile { bake, cloud, tree });
         }

@@ -36,12 +36,14 @@ mod facets;
 pub mod file;
 mod payload;
 pub(crate) mod quantize;
+mod store;
 
 pub(crate) use facets::{ClusterRef, Facets};
 pub use file::{BakeRecord, TreeFile, TreeFileError};
 pub use payload::Precision;
 pub(crate) use payload::{PackedLeaf, Payload, Rank};
 pub(crate) use quantize::CompactPair;
+use store::Store;
 
 /// Index of a node in a [`Tree`].
 pub type NodeId = u32;
@@ -102,7 +104,7 @@ pub(crate) struct PairRecord {
 #[derive(Clone, Debug)]
 pub(crate) enum NodeArrays {
     Full(Vec<PairRecord>),
-    Compact(Vec<CompactPair>),
+    Compact(Store<CompactPair>),
 }
 
 impl Default for NodeArrays {
@@ -182,7 +184,7 @@ impl NodeArrays {
         match self {
             NodeArrays::Full(pairs) => pairs[p].f[field::LIGHT_OFFSET][s] = offset,
             NodeArrays::Compact(pairs) => {
-                let pair = &mut pairs[p];
+                let pair = &mut pairs.owned_mut()[p];
                 pair.light_offset[s] = quantize::light_offset_steps(pair.base, pair.steps(s), offset);
             }
         }
@@ -377,7 +379,7 @@ impl Tree {
         let mut order: Vec<u32> = (0..n as u32).collect();
         let mut pairs = match precision {
             Precision::Full => NodeArrays::Full(vec![PairRecord::default(); n]),
-            Precision::Compact => NodeArrays::Compact(vec![CompactPair::default(); n]),
+            Precision::Compact => NodeArrays::Compact(vec![CompactPair::default(); n].into()),
         };
         let mut cluster: Vec<Option<Box<Cluster>>> = vec![None; nodes];
         let mut payload = match precision {
@@ -386,8 +388,8 @@ impl Tree {
                 radiance: vec![Vec3::ZERO; nodes],
             },
             Precision::Compact => Payload::Compact {
-                inner: vec![Default::default(); n],
-                leaves: surfels.iter().map(PackedLeaf::of).collect(),
+                inner: vec![Default::default(); n].into(),
+                leaves: surfels.iter().map(PackedLeaf::of).collect::<Vec<_>>().into(),
             },
         };
         if n == 0 {
@@ -450,6 +452,12 @@ impl Tree {
         if let Facets::Full { planes: p, .. } = &mut self.facets {
             *p = planes;
         }
+    }
+
+    /// Whether the tree's arrays lie in a mapped tree file (`TreeFile::open`,
+    /// feature `mmap`) rather than in memory of their own.
+    pub fn is_mapped(&self) -> bool {
+        matches!(&self.nodes, NodeArrays::Compact(p) if p.is_mapped())
     }
 
     /// Number of nodes (`2n − 1` for `n` surfels, 0 for an empty cloud).

@@ -20,6 +20,7 @@ use glam::Vec3;
 
 use super::bound::disks_area;
 use super::bytes::{Reader, put_f32, put_i16, put_u16};
+use super::store::{Plain, Store};
 use super::{Cluster, LEAF, LEAF_BIT, NodeArrays, NodeId, SplatRecord, Tree, field};
 use crate::points::Surfel;
 
@@ -260,6 +261,11 @@ impl PackedLeaf {
     }
 }
 
+// SAFETY: `repr(C)`, integers and floats; `put` writes the memory image.
+unsafe impl Plain for PackedSplat {}
+// SAFETY: as for `PackedSplat`.
+unsafe impl Plain for PackedLeaf {}
+
 const _: () = assert!(std::mem::size_of::<PackedSplat>() == PackedSplat::BYTES);
 const _: () = assert!(std::mem::size_of::<PackedLeaf>() == PackedLeaf::BYTES);
 
@@ -274,8 +280,8 @@ pub(crate) enum Payload {
     /// An inner node's indexed by its child link (the pair record of its
     /// children; record 0's is unused), a leaf's by its surfel.
     Compact {
-        inner: Vec<PackedSplat>,
-        leaves: Vec<PackedLeaf>,
+        inner: Store<PackedSplat>,
+        leaves: Store<PackedLeaf>,
     },
 }
 

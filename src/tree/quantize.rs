@@ -36,6 +36,9 @@ const ANGLE: f32 = 65535.0;
 
 const _: () = assert!(std::mem::size_of::<CompactPair>() == CompactPair::BYTES);
 
+// SAFETY: `repr(C)`, integers and floats; `put` writes the memory image.
+unsafe impl super::store::Plain for CompactPair {}
+
 /// Two sibling nodes' test fields against their parent's sphere (see the
 /// module's notes): per field, one value per slot.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -23,8 +23,9 @@ pub fn load_tree(path: &Path) -> Res<(TreeFile, &Path, f64)> {
             path.display()
         )));
     }
-    let tree = TreeFile::load(std::io::BufReader::new(file))
-        .map_err(|e| crate::exit::input(format!("{}: {e}", path.display())))?;
+    drop(file);
+    // Mapped: a compact tree is used where it lies in the file.
+    let tree = TreeFile::open(path).map_err(|e| crate::exit::input(format!("{}: {e}", path.display())))?;
     Ok((tree, path, t0.elapsed().as_secs_f64()))
 }
 
@@ -45,10 +46,11 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
     stages.finish();
     let file = file?;
     let seconds = t0.elapsed().as_secs_f64();
-    let bytes = file.to_bytes();
     crate::images::make_folder_for(&out_path)?;
-    std::fs::write(&out_path, &bytes)
+    // Under a new name, then renamed: a render mapping the old file keeps it.
+    file.write_to(&out_path)
         .map_err(|e| crate::exit::output(format!("{}: {e}", out_path.display())))?;
+    let bytes = std::fs::metadata(&out_path).map_or(0, |m| m.len());
     let b = file.bake();
     println!(
         "pbgi bake: {} ({} triangles), {} bounce(s){}, density {}{}",
@@ -72,7 +74,7 @@ pub fn cmd_bake(a: &BakeArgs) -> Res<()> {
         file.cloud().len(),
         file.tree().len(),
         file.tree().depth(),
-        bytes.len() as f64 / 1e6,
+        bytes as f64 / 1e6,
         pool.current_num_threads()
     );
     println!("wrote {} (scene hash {:016x})", out_path.display(), b.scene);
