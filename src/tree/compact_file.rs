@@ -18,8 +18,6 @@
 //! unused entry as the build writes them), record by record. Nothing is
 //! derived again, so a mapped file ([`Store`]) is used where it lies.
 
-use glam::Vec3;
-
 use super::bytes::Reader;
 use super::check::{self, Fault, Place};
 use super::facets::PackedFacets;
@@ -39,7 +37,9 @@ fn padded(x: u64) -> u64 {
 /// the surfels ending at `surfels_end`; and where the last ends.
 pub(super) struct Sections {
     pairs: u64,
+    nodes_end: u64,
     facets: u64,
+    facets_end: u64,
     pub end: u64,
 }
 
@@ -48,9 +48,16 @@ impl Sections {
         let pairs = padded(surfels_end);
         // Each a multiple of 4 bytes, from a multiple of 64.
         let node = (CompactPair::BYTES + PackedSplat::BYTES + PackedLeaf::BYTES) as u64;
-        let facets = padded(pairs + node * n);
-        let end = padded(facets + PackedFacets::BYTES as u64 * clusters);
-        Sections { pairs, facets, end }
+        let nodes_end = pairs + node * n;
+        let facets = padded(nodes_end);
+        let facets_end = facets + PackedFacets::BYTES as u64 * clusters;
+        Sections {
+            pairs,
+            nodes_end,
+            facets,
+            facets_end,
+            end: padded(facets_end),
+        }
     }
 }
 
@@ -74,12 +81,9 @@ fn sections(tree: &Tree, start: u64, emit: &mut dyn FnMut(&[u8])) {
     pairs.iter().for_each(|p| one(&|out| p.put(out)));
     inner.iter().for_each(|p| one(&|out| p.put(out)));
     leaves.iter().for_each(|l| one(&|out| l.put(out)));
-    let leaves_end =
-        at.pairs + ((CompactPair::BYTES + PackedSplat::BYTES + PackedLeaf::BYTES) * pairs.len()) as u64;
-    one(&|out| out.extend_from_slice(&zeros[..(at.facets - leaves_end) as usize]));
+    one(&|out| out.extend_from_slice(&zeros[..(at.facets - at.nodes_end) as usize]));
     facets.iter().for_each(|f| one(&|out| f.put(out)));
-    let facets_end = at.facets + (PackedFacets::BYTES * facets.len()) as u64;
-    one(&|out| out.extend_from_slice(&zeros[..(at.end - facets_end) as usize]));
+    one(&|out| out.extend_from_slice(&zeros[..(at.end - at.facets_end) as usize]));
 }
 
 /// Appends a compact tree's sections; `out` holds the header and surfels.
@@ -107,8 +111,7 @@ fn first_difference(tree: &Tree, bytes: &[u8], start: usize) -> Option<usize> {
 /// Node `k`'s stored light offset is the one the tree derives of its
 /// centroids ([`Tree::derive`]).
 fn light_offset_derived(tree: &Tree, pairs: &[CompactPair], k: u32) -> bool {
-    let rec = tree.splat_record(k).expect("a node");
-    let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
+    let offset = tree.splat_record(k).expect("a node").light_offset();
     let (p, s) = NodeArrays::locate(k);
     let pair = &pairs[p];
     pair.light_offset[s] == quantize::light_offset_steps(pair.base, pair.steps(s), offset)

@@ -221,6 +221,12 @@ pub(crate) struct SplatRecord {
 }
 
 impl SplatRecord {
+    /// How far the light centroid lies from the area centroid
+    /// ([`crate::CutOptions::light_offset`]).
+    pub(crate) fn light_offset(&self) -> f32 {
+        Vec3::from_array(self.light_centroid).distance(Vec3::from_array(self.centroid))
+    }
+
     /// `rise`, `lift` and `radius` of a node of kind `kind`, area `area`,
     /// bounding radius `radius` and cone sine `sin`.
     #[inline(always)]
@@ -446,8 +452,7 @@ impl Tree {
             }
             // Both centroids lie in the sphere (built so, or checked in a
             // file before this runs): at most `2R`, finite.
-            let offset = Vec3::from_array(rec.light_centroid).distance(Vec3::from_array(rec.centroid));
-            self.nodes.set_light_offset(k, offset);
+            self.nodes.set_light_offset(k, rec.light_offset());
         }
         if let Facets::Full { planes: p, .. } = &mut self.facets {
             *p = planes;
