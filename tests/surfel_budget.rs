@@ -233,3 +233,97 @@ fn the_budget_holds_however_finely_surfaces_are_cut() {
         "bias {bias:+.4}, RMS {spread:.4} (seed to seed {noise:.4})"
     );
 }
+
+/// A slab with two equal boxes stacked on it: the slab's top under the
+/// boxes and both faces where the boxes meet lie inside a solid, and the
+/// scene's surface area (12.96) is 1.44 more than its area in the open.
+fn stacked_boxes() -> Scene {
+    // Faces outward, counter-clockwise seen from outside.
+    let cuboid = |lo: glam::Vec3, hi: glam::Vec3| {
+        let mut m = pbgi::scene::Mesh::default();
+        let (c, h) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let n = glam::Vec3::AXES[axis] * sign;
+                let (u, v) = (glam::Vec3::AXES[(axis + 1) % 3], glam::Vec3::AXES[(axis + 2) % 3]);
+                let base = m.positions.len() as u32;
+                for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    m.positions.push(c + (n + u * a + v * b) * h);
+                }
+                let [i, j] = if sign > 0.0 { [1, 2] } else { [2, 1] };
+                let [k, l] = if sign > 0.0 { [2, 3] } else { [3, 2] };
+                m.triangles
+                    .extend([[base, base + i, base + j], [base, base + k, base + l]]);
+            }
+        }
+        m
+    };
+    let mut s = cornell_box();
+    let v = glam::Vec3::new;
+    s.meshes = vec![
+        cuboid(v(-1.0, -0.2, -1.0), v(1.0, 0.0, 1.0)),
+        cuboid(v(-0.3, 0.0, -0.3), v(0.3, 0.4, 0.3)),
+        cuboid(v(-0.3, 0.4, -0.3), v(0.3, 0.8, 0.3)),
+    ];
+    s.lights = vec![Light::Directional {
+        direction: v(-0.3, -1.0, -0.2).normalize(),
+        irradiance: glam::Vec3::splat(3.0),
+    }];
+    s.validate().unwrap();
+    s
+}
+
+/// With `drop_buried`, no surfel lies inside a solid: none on the slab
+/// under the boxes, none where the boxes meet (where the upper box's bottom is tested, rays
+/// through the lower box leave it where its bottom lies on the slab's top,
+/// a front and a back face at one distance). Their share goes to the
+/// surfaces in the open, so the density's count over the whole scene, and
+/// a budget, still hold.
+#[test]
+fn no_surfel_lies_inside_a_solid_and_the_budget_holds() {
+    use pbgi::render::{BakeOptions, Lights, Tracer, bake};
+    let s = stacked_boxes();
+    let (tracer, lights) = (Tracer::new(&s), Lights::new(&s));
+    let density = 2000.0;
+    let baked = bake(
+        &s,
+        &tracer,
+        &lights,
+        &BakeOptions {
+            density,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let baked_surfels = baked.cloud.surfels();
+    let mut meets = [0; 2];
+    for p in baked_surfels.iter().map(|s| s.position) {
+        let inside = p.x.abs() < 0.299 && p.z.abs() < 0.299;
+        for (m, y) in meets.iter_mut().zip([0.0, 0.4]) {
+            if inside && (p.y - y).abs() < 1e-4 {
+                *m += 1;
+            }
+        }
+    }
+    assert_eq!(
+        meets,
+        [0, 0],
+        "surfels on the slab under the boxes, and where the boxes meet"
+    );
+    let (n, want) = (baked_surfels.len() as f64, density as f64 * 12.96);
+    assert!((n / want - 1.0).abs() < 0.02, "{n} surfels, {want} expected");
+    // Placed again at a density raised by 12.96/11.52, its sites on the
+    // 1.44 inside were left out.
+    let buried = baked.buried as f64 / (want / 11.52 * 1.44);
+    assert!((buried - 1.0).abs() < 0.05, "{} buried", baked.buried);
+    let budget = 3000;
+    let opts = RenderOptions {
+        surfel_budget: Some(budget),
+        ..RenderOptions::default()
+    };
+    let n = surfels(&s, &opts);
+    assert!(
+        (n as f64 / budget as f64 - 1.0).abs() < 0.03,
+        "{n} surfels for a budget of {budget}"
+    );
+}

@@ -170,6 +170,7 @@ pub(super) fn build(
         density: opts.surfel_density(scene)?,
         light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
         seed: opts.seed,
+        drop_buried: opts.drop_buried,
     };
     let clock = Instant::now();
     let baked = bake_with_progress(scene, tracer, lights, &bake_opts, &|d, n| progress(SURFELS, d, n))?;
@@ -294,6 +295,7 @@ pub fn bake_record(scene: &Scene, opts: &RenderOptions) -> BakeRecord {
         light_samples: if opts.ao { 0 } else { opts.surfel_light_samples },
         bounces: opts.bounces,
         ao: opts.ao,
+        drop_buried: opts.drop_buried,
         gathered,
         max_solid_angle: if gathered { opts.cut.max_solid_angle } else { 0.0 },
         microbuffer: if gathered { opts.microbuffer as u32 } else { 0 },

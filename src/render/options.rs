@@ -218,6 +218,9 @@ pub struct RenderOptions {
     pub surfel_budget: Option<u32>,
     /// Area-light samples per surfel.
     pub surfel_light_samples: u32,
+    /// Leave out the surfels inside solids
+    /// ([`BakeOptions::drop_buried`](crate::render::BakeOptions::drop_buried)).
+    pub drop_buried: bool,
     /// About this many gathers of the environment's light, and of each
     /// extra bounce, at the surfels whatever their number: surfels share
     /// one in flat groups of at least 8, each over about the same share of
@@ -392,6 +395,7 @@ impl Default for RenderOptions {
             density: 2000.0,
             surfel_budget: None,
             surfel_light_samples: 16,
+            drop_buried: false,
             surfel_gathers: DEFAULT_SURFEL_GATHERS,
             tree_precision: Precision::Full,
             component: Component::All,

@@ -1,7 +1,7 @@
 //! Baking a scene into surfels: stratified area-uniform sampling of every
 //! surface (triangles smaller than a surfel pooled, so the count follows the
-//! density, not the triangles) and direct light at each surfel through
-//! shadow rays.
+//! density, not the triangles), none inside a solid where asked, and
+//! direct light at each surfel through shadow rays.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -22,12 +22,18 @@ const TICK: usize = 4096;
 /// How a scene is turned into surfels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeOptions {
-    /// Surfels per unit of surface area.
+    /// Surfels per unit of surface area, counted over the whole surface
+    /// (with `drop_buried`, the share of the surfaces that lie inside a
+    /// solid goes to the surfaces in the open).
     pub density: f32,
     /// Area-light samples per surfel.
     pub light_samples: u32,
     /// Seed of every random choice (results do not depend on thread count).
     pub seed: u64,
+    /// Leave out the surfels that lie inside a solid: a face against
+    /// another, as a wall on its slab (see `docs/lab/compact-tree.md`,
+    /// "Records inside solids").
+    pub drop_buried: bool,
 }
 
 impl Default for BakeOptions {
@@ -36,6 +42,7 @@ impl Default for BakeOptions {
             density: 4000.0,
             light_samples: 16,
             seed: 1,
+            drop_buried: false,
         }
     }
 }
@@ -48,6 +55,34 @@ pub struct Baked {
     pub cloud: PointCloud,
     /// Diffuse albedo of each surfel, for extra bounces.
     pub albedo: Vec<Vec3>,
+    /// Sites left out because they lay inside a solid (of the last
+    /// placing; see [`BakeOptions::density`]).
+    pub buried: usize,
+}
+
+/// Rays that must all leave through a back face for a surfel to be inside
+/// a solid.
+const BURIED_RAYS: u32 = 8;
+
+/// Whether a surfel at `p` (unit normal `n`) lies inside a solid: every
+/// one of [`BURIED_RAYS`] rays over its hemisphere, from just off its
+/// face, meets a back face first. That is a face lying against another (a
+/// slab under a wall, a box's footprint on a floor) or running into one.
+/// No light reaches such a surfel and no camera sees it, but a cache
+/// record placed there would gather the room through the solid (the
+/// point-based gather tests no visibility of back faces) and serve that
+/// to the visible surface beside it. A surfel in the open meets a front
+/// face or the sky with its first ray, so the test costs one ray there.
+fn buried(tracer: &Tracer, p: Vec3, n: Vec3, scramble: u32) -> bool {
+    let o = p + n * tracer.epsilon();
+    let (t, b) = n.any_orthonormal_pair();
+    (0..BURIED_RAYS).all(|j| {
+        // Cosine-distributed, stratified.
+        let u = hammersley(j, BURIED_RAYS, scramble);
+        let (r, phi) = (u.x.sqrt(), std::f32::consts::TAU * u.y);
+        let d = (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt()).normalize();
+        tracer.meets_back_face(o, d)
+    })
 }
 
 /// A low-discrepancy point in the unit square (Hammersley with a scramble).
@@ -171,7 +206,7 @@ struct Sites {
     pools: Vec<Pool>,
 }
 
-fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
+fn sites(scene: &Scene, opts: &BakeOptions, density: f32) -> Result<Sites, Error> {
     // Per triangle, twice its area and its normal (`None`: no area).
     let shapes: Vec<Vec<Option<(f32, Vec3)>>> = scene
         .meshes
@@ -183,10 +218,10 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
                 .collect()
         })
         .collect();
-    let density = opts.density as f64;
+    let per_area = density as f64;
     let mut expected = scene.materials.len() as f64;
     for shape in shapes.iter().flatten().flatten() {
-        expected += 0.5 * shape.0 as f64 * density;
+        expected += 0.5 * shape.0 as f64 * per_area;
     }
     if expected > PointCloud::MAX_SURFELS as f64 {
         return Err(Error::TooManySurfels {
@@ -205,7 +240,7 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
                 continue;
             };
             let area = 0.5 * twice_area;
-            let want = area * opts.density;
+            let want = area * density;
             if want < 1.0 {
                 small[mesh.material].push(((m as u32, t as u32), (twice_area, normal)));
                 continue;
@@ -227,7 +262,7 @@ fn sites(scene: &Scene, opts: &BakeOptions) -> Result<Sites, Error> {
         .into_iter()
         .enumerate()
         .filter(|(_, triangles)| !triangles.is_empty())
-        .map(|(material, triangles)| pool(scene, material, triangles, opts))
+        .map(|(material, triangles)| pool(scene, material, triangles, opts.seed, density))
         .collect();
     Ok(Sites { own, pools })
 }
@@ -238,7 +273,8 @@ fn pool(
     scene: &Scene,
     material: usize,
     triangles: Vec<(TriangleRef, (f32, Vec3))>,
-    opts: &BakeOptions,
+    seed: u64,
+    density: f32,
 ) -> Pool {
     let centroid = |&((m, t), _): &(TriangleRef, (f32, Vec3))| {
         let mesh = &scene.meshes[m as usize];
@@ -264,10 +300,8 @@ fn pool(
             sum
         })
         .collect();
-    let mut rng = Rng::new(mix(
-        opts.seed ^ (material as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-    ));
-    let want = sum * opts.density as f64;
+    let mut rng = Rng::new(mix(seed ^ (material as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+    let want = sum * density as f64;
     let count = want.floor() as u32 + u32::from((rng.f32() as f64) < want.fract());
     Pool {
         material,
@@ -277,6 +311,77 @@ fn pool(
         count,
         scramble: rng.next_u64() as u32,
     }
+}
+
+impl Site {
+    /// Its position, normal, radius, material and place.
+    fn resolve(self, scene: &Scene, pools: &[Pool]) -> Own {
+        match self {
+            Site::Own(s) => s,
+            Site::Pooled { pool, k } => pools[pool].site(scene, k),
+        }
+    }
+}
+
+/// The two scrambles of surfel site `i`'s random choices.
+fn scramble(seed: u64, i: usize) -> [u32; 2] {
+    let h = mix(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    [h as u32, (h >> 32) as u32]
+}
+
+/// The sites that make surfels, each with its index among all sites.
+struct Open {
+    sites: Vec<(u32, Site)>,
+    pools: Vec<Pool>,
+    /// Sites left out inside a solid.
+    buried: usize,
+}
+
+/// The sites at `opts`' density that make surfels: on a cut-out's opaque
+/// part and, with [`BakeOptions::drop_buried`], not inside a solid
+/// ([`buried`]). Where some are buried, the
+/// sites are placed again at a density raised by their share, so that the
+/// surfels number what the density gives the scene's whole surface (a
+/// budget holds) however much of it lies against other surfaces.
+fn in_the_open(scene: &Scene, tracer: &Tracer, opts: &BakeOptions) -> Result<Open, Error> {
+    let place = |density: f32| -> Result<Open, Error> {
+        let Sites { own, pools } = sites(scene, opts, density)?;
+        let pooled = pools
+            .iter()
+            .enumerate()
+            .flat_map(|(pool, p)| (0..p.count).map(move |k| Site::Pooled { pool, k }));
+        let all: Vec<Site> = own.iter().map(|&s| Site::Own(s)).chain(pooled).collect();
+        // Per site: `None` on a hole, else whether it is buried.
+        let open: Vec<Option<bool>> = all
+            .par_iter()
+            .enumerate()
+            .map(|(i, site)| {
+                let (position, normal, _, material, ((m, t), bary)) = site.resolve(scene, &pools);
+                // No surfel on a cut-out's holes.
+                let mesh = &scene.meshes[m as usize];
+                if !scene.materials[material].opaque_at(mesh, t, bary) {
+                    return None;
+                }
+                let [a, b] = scramble(opts.seed, i);
+                Some(opts.drop_buried && buried(tracer, position, normal, a ^ b))
+            })
+            .collect();
+        let buried = open.iter().filter(|&&o| o == Some(true)).count();
+        let sites = all
+            .into_iter()
+            .zip(open)
+            .enumerate()
+            .filter(|(_, (_, o))| *o == Some(false))
+            .map(|(i, (site, _))| (i as u32, site))
+            .collect();
+        Ok(Open { sites, pools, buried })
+    };
+    let first = place(opts.density)?;
+    if first.buried == 0 || first.sites.is_empty() {
+        return Ok(first);
+    }
+    let share = first.sites.len() as f64 / (first.sites.len() + first.buried) as f64;
+    place((opts.density as f64 / share).min(f32::MAX as f64) as f32)
 }
 
 /// Samples the surfels of `scene` and lights them directly (`scene` valid,
@@ -307,36 +412,26 @@ pub(super) fn bake_with_progress(
             expected: "a finite number > 0 (surfels per unit area)",
         });
     }
-    let Sites { own, pools } = sites(scene, opts)?;
-    let pooled = pools
-        .iter()
-        .enumerate()
-        .flat_map(|(pool, p)| (0..p.count).map(move |k| Site::Pooled { pool, k }));
-    let all: Vec<Site> = own.iter().map(|&s| Site::Own(s)).chain(pooled).collect();
+    let Open {
+        sites: all,
+        pools,
+        buried,
+    } = in_the_open(scene, tracer, opts)?;
     let done = AtomicUsize::new(0);
     tick(0, all.len());
     let baked: Vec<Option<(Surfel, Vec3)>> = all
         .par_iter()
-        .enumerate()
-        .map(|(i, &site)| {
-            let (position, normal, radius, material, ((m, t), bary)) = match site {
-                Site::Own(s) => s,
-                Site::Pooled { pool, k } => pools[pool].site(scene, k),
-            };
+        .map(|&(i, site)| {
+            let i = i as usize;
+            let (position, normal, radius, material, ((m, t), bary)) = site.resolve(scene, &pools);
             let (mesh, material) = (&scene.meshes[m as usize], &scene.materials[material]);
-            // No surfel on a cut-out's holes; a texture averaged over the
-            // surfel's disk.
-            if !material.opaque_at(mesh, t, bary) {
-                return Ok(None);
-            }
+            let scramble = scramble(opts.seed, i);
             let at = SurfacePoint {
                 triangle: t,
                 uv: bary,
                 width: 2.0 * radius,
             };
             let albedo = material.albedo_at(mesh, &at);
-            let h = mix(opts.seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            let scramble = [h as u32, (h >> 32) as u32];
             let radiance = if albedo.max_element() <= 0.0 {
                 Vec3::ZERO
             } else if let Site::Pooled { pool, k } = site {
@@ -395,5 +490,6 @@ pub(super) fn bake_with_progress(
     Ok(Baked {
         cloud: PointCloud::new(surfels).expect("baked surfels are validated one by one"),
         albedo,
+        buried,
     })
 }

@@ -211,6 +211,38 @@ impl Tracer {
         })
     }
 
+    /// Whether the ray along `origin + t·dir` (`dir` unit) meets a back
+    /// face first, as a ray from inside a solid does. A face lying against
+    /// another (a slab under a wall) puts a front and a back face at one
+    /// distance, found in either order: a back face within [`epsilon`]
+    /// of the nearest front face counts as first.
+    ///
+    /// [`epsilon`]: Self::epsilon
+    pub fn meets_back_face(&self, origin: Vec3, dir: Vec3) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, f32::INFINITY);
+        let (mut front, mut back) = (f32::INFINITY, f32::INFINITY);
+        let tie = self.epsilon;
+        // Each hit shortens the ray to a tie beyond it, so that the faces
+        // within a tie of the nearest are all met.
+        bvh.ray_traverse(ray, &mut RayHit::none(), |r, id| {
+            let t = self.distance(id, r);
+            if !t.is_finite() {
+                return t;
+            }
+            let nearest = if geometric_normal(&self.triangles[id]).dot(dir) > 0.0 {
+                &mut back
+            } else {
+                &mut front
+            };
+            *nearest = nearest.min(t);
+            t + tie
+        });
+        back.is_finite() && back <= front + tie
+    }
+
     /// Whether the ray from a receiver at `origin` (unit `normal`) along
     /// `dir` leaves the scene: nothing at any distance (cut-outs' holes let
     /// it through), so that the environment shows there.

@@ -8,7 +8,7 @@
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `PBGITREE` |
 //! | 8 | 4 | format version: [`VERSION`] for a full tree, [`COMPACT_VERSION`] for a compact one |
-//! | 12 | 40 | [`BakeRecord`]: scene hash u64, seed u64, density f32, light samples u32, bounces u32, flags u32 (bit 0 AO, bit 1 gathered), Ω f32, microbuffer u32 |
+//! | 12 | 40 | [`BakeRecord`]: scene hash u64, seed u64, density f32, light samples u32, bounces u32, flags u32 (bit 0 AO, bit 1 gathered, bit 2 surfels inside solids left out), Ω f32, microbuffer u32 |
 //! | 52 | 12 | counts: surfels `n`, clusters (facets of the mixed nodes), tree depth (u32 each) |
 //! | 64 | 40 n | surfels: position, normal, radius, radiance |
 //! | | | a compact tree: its arrays as they lie in memory (see below) |
@@ -54,6 +54,7 @@ const CLUSTER: usize = 156;
 const CHECKSUM: usize = 8;
 const AO: u32 = 1;
 const GATHERED: u32 = 2;
+const DROP_BURIED: u32 = 4;
 
 /// How the surfels' radiance was made, recorded so a render can refuse a
 /// tree that contradicts its own settings. The renderer fills it
@@ -75,6 +76,9 @@ pub struct BakeRecord {
     pub bounces: u32,
     /// Ambient-occlusion mode: the surfels carry no radiance.
     pub ao: bool,
+    /// Whether surfels inside solids were left out
+    /// (`pbgi::render::BakeOptions::drop_buried`).
+    pub drop_buried: bool,
     /// Whether the surfels' radiance was gathered through the tree (extra
     /// bounces, environment light), and so depends on Ω and the microbuffer.
     pub gathered: bool,
@@ -272,7 +276,9 @@ impl TreeFile {
         put_u32(&mut out, b.bounces);
         put_u32(
             &mut out,
-            if b.ao { AO } else { 0 } | if b.gathered { GATHERED } else { 0 },
+            if b.ao { AO } else { 0 }
+                | if b.gathered { GATHERED } else { 0 }
+                | if b.drop_buried { DROP_BURIED } else { 0 },
         );
         put_f32(&mut out, b.max_solid_angle);
         put_u32(&mut out, b.microbuffer);
@@ -452,7 +458,7 @@ impl TreeFile {
             offset: offset as u64,
             what,
         };
-        if flags & !(AO | GATHERED) != 0 {
+        if flags & !(AO | GATHERED | DROP_BURIED) != 0 {
             return Err(invalid(40, format!("unknown flags {flags:#x}")));
         }
         if n > PointCloud::MAX_SURFELS as u64 {
@@ -469,6 +475,7 @@ impl TreeFile {
             bounces,
             ao: flags & AO != 0,
             gathered: flags & GATHERED != 0,
+            drop_buried: flags & DROP_BURIED != 0,
             max_solid_angle,
             microbuffer,
         };

@@ -242,6 +242,9 @@ pub struct Settings {
     /// (quantized against each node's sphere, 32 bytes a node).
     #[arg(long, value_parser = ["full", "compact"], default_value = "full")]
     pub tree_precision: String,
+    /// Surfels inside solids (a face against another, as a wall on its slab): kept, or dropped and their share given to the surfaces in the open.
+    #[arg(long, value_parser = ["keep", "drop"], default_value = "keep")]
+    pub buried_surfels: String,
     /// Hybrid: switch an entry to single below this many active lanes.
     #[arg(long, default_value_t = CutOptions::default().hybrid_threshold, help_heading = DEVELOPER)]
     pub hybrid_threshold: u32,
@@ -280,6 +283,7 @@ impl Settings {
             } else {
                 Precision::Full
             },
+            drop_buried: self.buried_surfels == "drop",
             ..RenderOptions::default()
         })
     }
