@@ -285,31 +285,33 @@ fn no_surfel_lies_inside_a_solid_and_the_budget_holds() {
     let s = stacked_boxes();
     let (tracer, lights) = (Tracer::new(&s), Lights::new(&s));
     let density = 2000.0;
-    let baked = bake(
-        &s,
-        &tracer,
-        &lights,
-        &BakeOptions {
+    let meets = |drop_buried| {
+        let o = BakeOptions {
             density,
+            drop_buried,
             ..Default::default()
-        },
-    )
-    .unwrap();
-    let baked_surfels = baked.cloud.surfels();
-    let mut meets = [0; 2];
-    for p in baked_surfels.iter().map(|s| s.position) {
-        let inside = p.x.abs() < 0.299 && p.z.abs() < 0.299;
-        for (m, y) in meets.iter_mut().zip([0.0, 0.4]) {
-            if inside && (p.y - y).abs() < 1e-4 {
-                *m += 1;
+        };
+        let baked = bake(&s, &tracer, &lights, &o).unwrap();
+        let mut meets = [0; 2];
+        for p in baked.cloud.surfels().iter().map(|s| s.position) {
+            let inside = p.x.abs() < 0.299 && p.z.abs() < 0.299;
+            for (m, y) in meets.iter_mut().zip([0.0, 0.4]) {
+                if inside && (p.y - y).abs() < 1e-4 {
+                    *m += 1;
+                }
             }
         }
-    }
+        (meets, baked)
+    };
+    let (kept, _) = meets(false);
+    assert!(kept.iter().all(|&m| m > 500), "kept: {kept:?}");
+    let (meets, baked) = meets(true);
     assert_eq!(
         meets,
         [0, 0],
         "surfels on the slab under the boxes, and where the boxes meet"
     );
+    let baked_surfels = baked.cloud.surfels();
     let (n, want) = (baked_surfels.len() as f64, density as f64 * 12.96);
     assert!((n / want - 1.0).abs() < 0.02, "{n} surfels, {want} expected");
     // Placed again at a density raised by 12.96/11.52, its sites on the
@@ -319,6 +321,7 @@ fn no_surfel_lies_inside_a_solid_and_the_budget_holds() {
     let budget = 3000;
     let opts = RenderOptions {
         surfel_budget: Some(budget),
+        drop_buried: true,
         ..RenderOptions::default()
     };
     let n = surfels(&s, &opts);
