@@ -394,6 +394,16 @@ fn a_tree_from_another_scene_or_settings_is_refused() {
         "--bounces"
     );
     assert_eq!(mismatch(&scene, &RenderOptions { ao: true, ..opts }), "--ao");
+    assert_eq!(
+        mismatch(
+            &scene,
+            &RenderOptions {
+                drop_buried: true,
+                ..opts
+            }
+        ),
+        "--buried-surfels (dropped)"
+    );
     // Free: the view, the samples, the scheme, the Ω of the render itself.
     let mut moved = small_box();
     moved.camera.origin.x += 0.1;

@@ -304,7 +304,7 @@ pub fn bake_record(scene: &Scene, opts: &RenderOptions) -> BakeRecord {
 
 /// Refuses a tree whose record differs from the one this render would bake.
 pub(super) fn check_record(baked: &BakeRecord, render: &BakeRecord) -> Result<(), RenderError> {
-    let pairs: [(&'static str, String, String); 9] = [
+    let pairs: [(&'static str, String, String); 10] = [
         (
             "scene (hash of its geometry, materials, lights and environment)",
             format!("{:016x}", baked.scene),
@@ -312,6 +312,11 @@ pub(super) fn check_record(baked: &BakeRecord, render: &BakeRecord) -> Result<()
         ),
         ("--bounces", baked.bounces.to_string(), render.bounces.to_string()),
         ("--ao", baked.ao.to_string(), render.ao.to_string()),
+        (
+            "--buried-surfels (dropped)",
+            baked.drop_buried.to_string(),
+            render.drop_buried.to_string(),
+        ),
         ("--density", baked.density.to_string(), render.density.to_string()),
         ("seed", baked.seed.to_string(), render.seed.to_string()),
         (
