@@ -825,7 +825,12 @@ fn tree_files_and_crops() {
     let mut failures = Vec::new();
     let mut count = 0;
     let scene = small_box();
-    let opts = quick(RenderOptions::default());
+    // The full file's records, whose places the edits below name (a
+    // compact file's are edited in tests/tree_file.rs).
+    let opts = quick(RenderOptions {
+        tree_precision: pbgi::tree::Precision::Full,
+        ..RenderOptions::default()
+    });
     let good = bake_tree(&scene, &opts).unwrap().to_bytes();
     let n = good.len();
     let with_checksum = |mut b: Vec<u8>| {

@@ -11,6 +11,7 @@ use pbgi::CutOptions;
 use pbgi::render::{Crop, DEFAULT_SURFEL_BUDGET, Direct, Gathers, RenderOptions, RenderOutput, render};
 use pbgi::scene::Scene;
 use pbgi::scene::builtin::cornell_box;
+use pbgi::tree::Precision;
 
 fn scene(mut s: Scene, width: u32, height: u32) -> Scene {
     s.camera.width = width;
@@ -233,7 +234,8 @@ fn a_gather_per_camera_sample_is_the_dense_render_bit_for_bit() {
     // while ray hits used glam's `Vec3A`, whose NEON cross product fuses a
     // multiply-subtract.
     // Pinned at Ω 0.05, N 24 (the render's defaults then, its Ω and N
-    // now), and with the direct light sampled as it was then, so that the
+    // now), and with the direct light sampled and the tree as they were
+    // then (full precision, the surfels inside solids kept), so that the
     // digest keeps guarding the gather.
     let s = scene(cornell_box(), 24, 20);
     let opts = |gathers| RenderOptions {
@@ -245,6 +247,8 @@ fn a_gather_per_camera_sample_is_the_dense_render_bit_for_bit() {
         },
         microbuffer: 24,
         direct: Direct::Sampled,
+        tree_precision: Precision::Full,
+        drop_buried: false,
         ..Default::default()
     };
     let dense = run(&s, opts(Gathers::All));

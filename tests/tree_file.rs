@@ -134,6 +134,15 @@ fn round_trip_gives_the_same_bytes_and_image() {
                 ..quick()
             },
         ),
+        (
+            "direct only, compact (empty tree)",
+            &scene,
+            RenderOptions {
+                bounces: 0,
+                tree_precision: Precision::Compact,
+                ..quick()
+            },
+        ),
     ];
     for (name, scene, opts) in cases {
         let baked = bake_tree(scene, &opts).unwrap();
@@ -398,7 +407,7 @@ fn a_tree_from_another_scene_or_settings_is_refused() {
         mismatch(
             &scene,
             &RenderOptions {
-                drop_buried: true,
+                drop_buried: !opts.drop_buried,
                 ..opts
             }
         ),

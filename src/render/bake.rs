@@ -164,7 +164,10 @@ pub(super) fn build(
             name: "surfels, tree and cuts",
             skipped: Some("--bounces 0: direct light only".into()),
         });
-        return Ok((PointCloud::default(), Tree::default()));
+        // Empty, at the asked precision, so that a file baked so says it.
+        let none = PointCloud::default();
+        let tree = Tree::build_with(&none, opts.tree_precision);
+        return Ok((none, tree));
     }
     let bake_opts = BakeOptions {
         density: opts.surfel_density(scene)?,
