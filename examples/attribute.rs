@@ -11,7 +11,7 @@
 //! its leaves.
 //!
 //! ```text
-//! cargo run --release --example attribute -- SCENE "x,y,z[,nx,ny,nz]" [--omega 0.15] [--n 14] [--top 12] [--density 2000]
+//! cargo run --release --example attribute -- SCENE "x,y,z[,nx,ny,nz]" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--drop-buried]
 //! ```
 //!
 //! The normal defaults to +y; irradiance is the mean of the three channels.
@@ -24,8 +24,7 @@ use pbgi::microbuffer::MicroBuffer;
 use pbgi::render::{BakeOptions, Lights, Tracer, bake};
 use pbgi::{CutOptions, CutRecorder, NodeId, PointCloud, Receiver, Scheme, Traversal, Tree};
 
-const USAGE: &str =
-    "usage: attribute SCENE \"x,y,z[,nx,ny,nz]\" [--omega 0.15] [--n 14] [--top 12] [--density 2000]";
+const USAGE: &str = "usage: attribute SCENE \"x,y,z[,nx,ny,nz]\" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--drop-buried]";
 
 fn mean(v: Vec3) -> f64 {
     f64::from(v.x + v.y + v.z) / 3.0
@@ -34,6 +33,7 @@ fn mean(v: Vec3) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut omega, mut n, mut top, mut density) = (0.15f32, 14usize, 12usize, 2000.0f32);
+    let (mut budget, mut drop_buried) = (None, false);
     let mut positional = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -43,6 +43,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--n" => n = value()?.parse()?,
             "--top" => top = value()?.parse()?,
             "--density" => density = value()?.parse()?,
+            "--budget" => budget = Some(value()?.parse()?),
+            "--drop-buried" => drop_buried = true,
             _ => positional.push(a.clone()),
         }
     }
@@ -62,8 +64,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = pbgi::scene::catalogue::resolve(scene)?;
     let tracer = Tracer::new(&scene);
     let lights = Lights::new(&scene);
+    if budget.is_some() {
+        let by_budget = pbgi::render::RenderOptions {
+            surfel_budget: budget,
+            ..Default::default()
+        };
+        density = by_budget.surfel_density(&scene)?;
+    }
     let opts = BakeOptions {
         density,
+        drop_buried,
         ..Default::default()
     };
     let baked = bake(&scene, &tracer, &lights, &opts)?;
