@@ -149,3 +149,89 @@ fn the_faces_of_a_convex_corner_do_not_hide_each_other() {
         }
     }
 }
+
+/// A well's wall and what lies beyond it: the wall `x ∈ [−T, 0]` (black,
+/// its inside facing +x over `y ∈ [0, 2]`, its outside facing −x above the
+/// roof), and a lit roof `y = 0.5` beyond it. With `corridor`, the roof is
+/// a corridor's (as round the sunlit atrium's well): the roof over
+/// `x ∈ [−1 − T, −T]`, `T` thick; under it the corridor's floor, the
+/// well's wall's outside and the corridor's outer wall (both faces), all
+/// black. `lit` keeps the roof alone.
+fn well(corridor: bool, lit: bool) -> Tree {
+    const T: f32 = 0.125;
+    let far = if corridor { -1.0 - T } else { -1.0 };
+    let mut surfels = grid(
+        Vec3::new(far, 0.5, -1.0),
+        Vec3::X,
+        Vec3::Z,
+        (-T - far, 2.0),
+        Vec3::Y,
+        1.0,
+    );
+    let mut black = |origin: Vec3, u: Vec3, (w, l): (f32, f32), normal: Vec3| {
+        if !lit {
+            surfels.extend(grid(origin, u, Vec3::Z, (w, l), normal, 0.0));
+        }
+    };
+    black(Vec3::new(0.0, 0.0, -1.0), Vec3::Y, (2.0, 2.0), Vec3::X);
+    black(Vec3::new(-T, 0.5, -1.0), Vec3::Y, (1.5, 2.0), -Vec3::X);
+    if corridor {
+        let (under, inside) = (0.5 - T, 1.0 - T);
+        black(Vec3::new(-T, 0.0, -1.0), Vec3::Y, (under, 2.0), -Vec3::X);
+        black(Vec3::new(-1.0, under, -1.0), Vec3::X, (inside, 2.0), -Vec3::Y);
+        black(Vec3::new(-1.0, 0.0, -1.0), Vec3::X, (inside, 2.0), Vec3::Y);
+        black(Vec3::new(-1.0, 0.0, -1.0), Vec3::Y, (under, 2.0), Vec3::X);
+        black(Vec3::new(-1.0 - T, 0.0, -1.0), Vec3::Y, (0.5, 2.0), -Vec3::X);
+    }
+    Tree::build(&PointCloud::new(surfels).unwrap())
+}
+
+/// The share of the roof's light that receivers in the well, above the
+/// roof and facing the wall, see through it at Ω `omega` and microbuffer
+/// `n`. The exact answer is nothing: every ray to the roof meets the wall.
+fn beyond_the_wall(corridor: bool, omega: f32, n: usize) -> Vec<f32> {
+    let opts = GatherOptions {
+        cut: CutOptions {
+            max_solid_angle: omega,
+            ..CutOptions::default()
+        },
+        microbuffer: n,
+        ..GatherOptions::default()
+    };
+    let receivers: Vec<(Vec3, Vec3)> = [0.5f32, 1.0]
+        .iter()
+        .flat_map(|&x| [1.5f32, 1.9].map(|y| (Vec3::new(x, y, 0.0), -Vec3::X)))
+        .collect();
+    let seen = |tree| Gather::new(tree, &opts).unwrap().irradiance(&receivers).unwrap();
+    let (e, alone) = (seen(&well(corridor, false)), seen(&well(corridor, true)));
+    for (o, r) in alone.iter().zip(&receivers) {
+        assert!(o.x > 0.01, "Ω {omega}: the roof alone sends {o} at {}", r.0);
+    }
+    e.iter().zip(&alone).map(|(e, o)| e.x / o.x).collect()
+}
+
+#[test]
+fn a_lit_roof_beyond_a_well_s_wall_stays_hidden_at_every_solid_angle() {
+    // A cluster holding the wall's inside and the roof beyond it is drawn
+    // as one splat whose facets are not resolved against each other: it
+    // sent the roof's light where its own wall facet hid it (the sunlit
+    // atrium's upper walls +1.5 % at the defaults). The tree parts such a
+    // node at the hiding facet's plane (`tree::bound::Hiding`), and one
+    // that holds the corridor's outer wall as well inside the well's wall
+    // (`Apart::Within`), where no facet's plane is a face's. Measured, the
+    // worst receiver at Ω 0.15 / 0.05 / 0.01: 0.8 / 3.9 / 1.4 % (the wall
+    // alone), 5.5 / 3.0 / 0.2 % (with the corridor). Without the facet's
+    // plane 23 / 11 / 0.6 % and 35 / 6.2 / 0.4 %; without the split inside
+    // the solid, 15 % at Ω 0.15 with the corridor. The leaves show none.
+    for corridor in [false, true] {
+        for (omega, n) in [(0.15, 14), (0.05, 24), (0.01, 32), (0.0, 48)] {
+            let shown = beyond_the_wall(corridor, omega, n);
+            for s in &shown {
+                assert!(
+                    *s <= 0.08,
+                    "corridor {corridor}, Ω {omega}, N {n}: {shown:?} of the roof shown"
+                );
+            }
+        }
+    }
+}

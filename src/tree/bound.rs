@@ -34,12 +34,37 @@ pub(super) struct BuildNode {
     pub base: [f32; 4],
 }
 
+/// The plane of a node's facet that could hide another of its facets from
+/// a receiver: all of the other lies behind it, and it does not all lie
+/// behind the other's (a wall's inside and the roof beyond the wall; not a
+/// block's top and side, each behind the other's plane, nor a room's floor
+/// and wall, each in front of the other's). Drawn as one splat, the node
+/// would send the hidden facet's light where the other hides it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Hiding {
+    pub normal: DVec3,
+    pub point: DVec3,
+    /// How far the facet's own disks leave its plane.
+    pub reach: f64,
+}
+
+impl Hiding {
+    /// Whether surfel `s` lies behind the plane, further than the hiding
+    /// facet's own disks reach. By its centre: the first row of a jamb
+    /// behind a wall pokes its disks out through the wall's plane.
+    #[inline(always)]
+    pub(super) fn behind(&self, s: &Surfel) -> bool {
+        self.normal.dot(s.position.as_dvec3() - self.point) < -self.reach
+    }
+}
+
 /// A surfel joins the facet whose first normal is nearest if within this
 /// cosine (about 18°), else starts a facet while there are fewer than three.
 const FACET_COS: f64 = 0.95;
 
-/// Bounding sphere, normal cone and aggregates of the surfels in `order`.
-pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> BuildNode {
+/// Bounding sphere, normal cone and aggregates of the surfels in `order`;
+/// with them, the planes of its facets that could hide others ([`Hiding`]).
+pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> (BuildNode, Vec<Hiding>) {
     // Centre of the position box: exact in f64, so homogeneous in the scale.
     let center = (lo.as_dvec3() + hi.as_dvec3()) * 0.5;
     let center32 = center.as_vec3();
@@ -90,12 +115,44 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
     for (plane, f) in planes.iter_mut().zip(&facets) {
         *plane = (f.4 / f.3, f.1.normalize_or_zero(), 0.0);
     }
+    // And per pair of facets `(k, j)`, how far in front of `j`'s plane
+    // any surfel of `k` lies: its centre (as `Hiding::behind` reads it),
+    // and its centre less its radius (a side's disks along a block's edge
+    // lie on the top's plane, and do not rise in front of it).
+    let mut lies = [[f64::NEG_INFINITY; FACETS]; FACETS];
+    let mut rises = [[f64::NEG_INFINITY; FACETS]; FACETS];
     for (&i, &k) in order.iter().zip(&facet_of) {
         let s = &surfels[i as usize];
+        let p = s.position.as_dvec3();
+        if facets.len() > 1 {
+            for (j, (c, m, _)) in planes[..facets.len()].iter().enumerate() {
+                let ahead = m.dot(p - *c);
+                lies[k as usize][j] = lies[k as usize][j].max(ahead);
+                rises[k as usize][j] = rises[k as usize][j].max(ahead - s.radius as f64);
+            }
+        }
         let (c, m, reach) = &mut planes[k as usize];
         let n = s.normal.as_dvec3().normalize_or_zero();
         let tilt = (1.0 - m.dot(n).powi(2)).max(0.0).sqrt();
-        *reach = reach.max(m.dot(s.position.as_dvec3() - *c).abs() + s.radius as f64 * tilt);
+        *reach = reach.max(m.dot(p - *c).abs() + s.radius as f64 * tilt);
+    }
+    // Only where the facets are flat pieces (as the microbuffer draws them):
+    // more orientations than facets (a block's six faces) merge into facets
+    // whose planes are none of its faces', and each face lies behind the
+    // others' planes.
+    let shown: f64 = facets.iter().map(|f| f.1.length()).sum();
+    let mut hiding = Vec::new();
+    for a in (0..facets.len()).filter(|_| shown >= f64::from(FLAT) * area) {
+        for b in (0..facets.len()).filter(|&b| b != a) {
+            let ((ca, ma, ra), (_, _, rb)) = (planes[a], planes[b]);
+            if lies[b][a] < -ra && rises[a][b] > rb {
+                hiding.push(Hiding {
+                    normal: ma,
+                    point: ca,
+                    reach: ra,
+                });
+            }
+        }
     }
     // The cone's axis is the area-weighted normal direction; its half-angle the
     // widest normal from it. Both are scale-free.
@@ -126,7 +183,7 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
     // both moves the surface (the slab under it 3 % dark).
     let centroid = if area > 0.0 { by_area / area } else { c };
     let lit = if light > 0.0 { by_light / light } else { centroid };
-    BuildNode {
+    let node = BuildNode {
         center: center32.to_array(),
         centroid: centroid.as_vec3().to_array(),
         light_centroid: lit.as_vec3().to_array(),
@@ -170,7 +227,8 @@ pub(super) fn bound_node(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) 
         depth: 0,
         steps: Default::default(),
         base: [0.0; 4],
-    }
+    };
+    (node, hiding)
 }
 
 /// Smallest f32 ≥ `x`.

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::bound::BuildNode;
+use super::bound::{BuildNode, Hiding};
 use super::facets::PackedFacets;
 use super::payload::PackedSplat;
 use super::quantize::{self, CompactPair};
@@ -205,7 +205,7 @@ pub(super) fn build_subtree(
 ) -> BuildNode {
     debug_assert_eq!(below.cluster.len(), 2 * order.len() - 2);
     let (lo, hi) = position_bounds(surfels, order);
-    let mut node = bound::bound_node(surfels, order, lo, hi);
+    let (mut node, hiding) = bound::bound_node(surfels, order, lo, hi);
     let children = match sphere {
         Base::Full => Base::Full,
         Base::Root | Base::Parent(_) => {
@@ -243,15 +243,16 @@ pub(super) fn build_subtree(
     below.write_parent(&node);
     let len = order.len();
     let fits = |back: usize| budget > 0 && ceil_log2(back.max(len - back)) < budget;
-    let mid = match back_to_back(surfels, order, lo, hi).filter(|&(_, back)| fits(back)) {
+    let apart = back_to_back(surfels, order, lo, hi).or_else(|| behind(surfels, order, &hiding));
+    let mid = match apart.filter(|&(_, back)| fits(back)) {
         // Both sides of a hollow solid (a room's wall, inside and outside)
         // go to different children, however close they lie: a
         // cluster holding both is drawn as neither (its mean normal
         // cancels) and shows the light of the side a receiver cannot see —
         // sky through closed walls, a sunlit outside inside the room. One
         // side alone is culled whole by the node test where it faces away.
-        Some((axis, back)) => {
-            order.sort_unstable_by_key(|&i| (surfels[i as usize].normal[axis] >= 0.0, i));
+        Some((apart, back)) => {
+            order.sort_unstable_by_key(|&i| (apart.after(&surfels[i as usize]), i));
             back
         }
         // Else (or where the larger side would not fit in the depth
@@ -312,19 +313,61 @@ pub(super) fn build_subtree(
 /// solid's sides but stray surfels (a curved surface's rim).
 const SIDE_SHARE: f64 = 0.05;
 
-/// The axis along which the surfels of `order` hold both sides of a solid
-/// around a hollow, if they do: some face `+axis` and some `−axis`
-/// (normals within 60° of it, each side at least [`SIDE_SHARE`] of the
-/// area), every one facing `+axis` lies on the `+` side of every one facing
-/// `−axis` (back to back, as a wall's inside and outside), and some face
+/// A solid is parted inside only where it is this thin against the node
+/// along its axis: a wall between two spaces the node holds (a well and the
+/// corridor's roof beyond its wall), not a block standing in one space,
+/// whose sides see the same room around it (parted in its middle, the
+/// Cornell box's blocks darkened its ceiling by half a per cent).
+const THIN: f32 = 0.1;
+
+/// How a node holding both sides of a solid parts them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Apart {
+    /// By the sign of the normal along `axis`: every face of the solid's
+    /// `+` side lies on the `+` side of every one of its `−` side.
+    Facing(usize),
+    /// At `(axis, s)`, inside one solid: the node holds several (a wall
+    /// and the one across a corridor behind it), so that faces of both
+    /// signs lie on either side, and the sign of a normal parts no solid.
+    Within(usize, f32),
+    /// By a facet's plane that could hide another facet ([`Hiding`]): the
+    /// surfels wholly behind it go first.
+    Behind(Hiding),
+}
+
+impl Apart {
+    /// Whether `s` goes to the second child.
+    #[inline(always)]
+    fn after(self, s: &Surfel) -> bool {
+        match self {
+            Apart::Facing(axis) => s.normal[axis] >= 0.0,
+            Apart::Within(axis, at) => s.position[axis] >= at,
+            Apart::Behind(plane) => !plane.behind(s),
+        }
+    }
+}
+
+/// Where the surfels of `order` hold both sides of a solid around a
+/// hollow, if they do, how to part them; with it, how many go to the first
+/// child. Both sides: some face `+axis` and some `−axis` (normals within
+/// 60° of it, each side at least [`SIDE_SHARE`] of the area), and some face
 /// looks at other surfels of the node (along any axis: the node is
 /// concave, as a room's edge is, its floor in front of its wall). A convex
 /// node (a slab, a box, a flat wall's two sides) its facets show from any
 /// side; faces that face each other (a room's opposite walls) hold a space
-/// that a spatial split parts as well. Of several axes, the one with the
-/// most area on its lesser side; with it, how many surfels have a
-/// negative component along it (they go to the first child).
-fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option<(usize, usize)> {
+/// that a spatial split parts as well.
+///
+/// Where every face of the `+` side lies on the `+` side of every one of
+/// the `−` side (back to back, as a wall's inside and outside), they part
+/// by facing ([`Apart::Facing`]). Of several axes, the one with the most
+/// area on its lesser side. Else, on an axis where faces of both signs lie
+/// on both sides (a well's wall, the corridor's outer wall behind it and
+/// the corridor's roof between them), a solid is a `−` face with the next
+/// face above it a `+` one: the highest `−` face and the lowest `+` one
+/// each bound one. The node parts in the middle of such a solid
+/// ([`Apart::Within`]), the one that leaves the most area on the lesser
+/// side, at least [`SIDE_SHARE`] on each.
+fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option<(Apart, usize)> {
     // Per axis and side (`+`, `−`): the area, and the extreme positions
     // along the axis of those facing that way.
     let mut area = 0.0f64;
@@ -353,6 +396,13 @@ fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option
     if !concave {
         return None;
     }
+    let count = |apart: Apart| {
+        order
+            .iter()
+            .filter(|&&i| !apart.after(&surfels[i as usize]))
+            .count()
+    };
+    let both = |axis: usize| side[axis][0].min(side[axis][1]) > SIDE_SHARE * area;
     let mut best = None;
     let mut most = SIDE_SHARE * area;
     for axis in 0..3 {
@@ -362,13 +412,82 @@ fn back_to_back(surfels: &[Surfel], order: &[u32], lo: Vec3, hi: Vec3) -> Option
             most = lesser;
         }
     }
-    best.map(|axis| {
-        let back = order
-            .iter()
-            .filter(|&&i| surfels[i as usize].normal[axis] < 0.0)
-            .count();
-        (axis, back)
-    })
+    if let Some(axis) = best {
+        let apart = Apart::Facing(axis);
+        return Some((apart, count(apart)));
+    }
+    // Several solids: the `+` face nearest above the highest `−` one, and
+    // the `−` face nearest below the lowest `+` one.
+    let mut above = Vec3::INFINITY;
+    let mut below = Vec3::NEG_INFINITY;
+    for &i in order {
+        let s = &surfels[i as usize];
+        for axis in 0..3 {
+            let (n, p) = (s.normal[axis], s.position[axis]);
+            if n > 0.5 && p > high_minus[axis] {
+                above[axis] = above[axis].min(p);
+            } else if n < -0.5 && p < low_plus[axis] {
+                below[axis] = below[axis].max(p);
+            }
+        }
+    }
+    let mut best = None;
+    let mut most = SIDE_SHARE * area;
+    for axis in (0..3).filter(|&axis| both(axis)) {
+        let solids = [(high_minus[axis], above[axis]), (below[axis], low_plus[axis])];
+        let thin =
+            |&(a, b): &(f32, f32)| a.is_finite() && b.is_finite() && b - a < THIN * (hi[axis] - lo[axis]);
+        for (a, b) in solids.into_iter().filter(thin) {
+            let at = a + 0.5 * (b - a);
+            let mut first = 0.0f64;
+            for &i in order {
+                let s = &surfels[i as usize];
+                if s.position[axis] < at {
+                    first += (s.radius as f64) * (s.radius as f64);
+                }
+            }
+            let lesser = first.min(area - first);
+            if lesser > most {
+                best = Some(Apart::Within(axis, at));
+                most = lesser;
+            }
+        }
+    }
+    best.map(|apart| (apart, count(apart)))
+}
+
+/// Of the planes of the node's facets that could hide others, the one that
+/// leaves the most area on its lesser side (at least [`SIDE_SHARE`]), and
+/// how many surfels lie behind it. A node that holds a wall's inside and
+/// what lies beyond the wall (the roof of the corridor behind it, with the
+/// wall's outside in another node, so that no axis holds both its sides)
+/// parts there.
+fn behind(surfels: &[Surfel], order: &[u32], hiding: &[Hiding]) -> Option<(Apart, usize)> {
+    let area: f64 = order
+        .iter()
+        .map(|&i| {
+            let r = surfels[i as usize].radius as f64;
+            r * r
+        })
+        .sum();
+    let mut best = None;
+    let mut most = SIDE_SHARE * area;
+    for plane in hiding {
+        let (mut back, mut first) = (0, 0.0f64);
+        for &i in order {
+            let s = &surfels[i as usize];
+            if plane.behind(s) {
+                back += 1;
+                first += (s.radius as f64) * (s.radius as f64);
+            }
+        }
+        let lesser = first.min(area - first);
+        if lesser > most {
+            best = Some((Apart::Behind(*plane), back));
+            most = lesser;
+        }
+    }
+    best
 }
 
 /// `⌈log₂ n⌉` (0 for `n ≤ 1`): the median split's depth over `n` surfels.
