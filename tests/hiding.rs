@@ -67,17 +67,22 @@ fn receivers() -> Vec<(Vec3, Vec3)> {
         .collect()
 }
 
-/// The share of the jamb's light each receiver sees with the wall over
-/// `−1 < x < wall`, at Ω `omega` and microbuffer `n`.
-fn shown(wall: f32, omega: f32, n: usize) -> Vec<f32> {
-    let opts = GatherOptions {
+/// The gather at Ω `omega` and microbuffer `n`.
+fn options(omega: f32, n: usize) -> GatherOptions {
+    GatherOptions {
         cut: CutOptions {
             max_solid_angle: omega,
             ..CutOptions::default()
         },
         microbuffer: n,
         ..GatherOptions::default()
-    };
+    }
+}
+
+/// The share of the jamb's light each receiver sees with the wall over
+/// `−1 < x < wall`, at Ω `omega` and microbuffer `n`.
+fn shown(wall: f32, omega: f32, n: usize) -> Vec<f32> {
+    let opts = options(omega, n);
     let receivers = receivers();
     let seen = |tree| Gather::new(tree, &opts).unwrap().irradiance(&receivers).unwrap();
     let (e, alone) = (seen(&scene(Some(wall))), seen(&scene(None)));
@@ -190,14 +195,7 @@ fn well(corridor: bool, lit: bool) -> Tree {
 /// roof and facing the wall, see through it at Ω `omega` and microbuffer
 /// `n`. The exact answer is nothing: every ray to the roof meets the wall.
 fn beyond_the_wall(corridor: bool, omega: f32, n: usize) -> Vec<f32> {
-    let opts = GatherOptions {
-        cut: CutOptions {
-            max_solid_angle: omega,
-            ..CutOptions::default()
-        },
-        microbuffer: n,
-        ..GatherOptions::default()
-    };
+    let opts = options(omega, n);
     let receivers: Vec<(Vec3, Vec3)> = [0.5f32, 1.0]
         .iter()
         .flat_map(|&x| [1.5f32, 1.9].map(|y| (Vec3::new(x, y, 0.0), -Vec3::X)))
