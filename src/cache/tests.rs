@@ -3,6 +3,7 @@ use crate::brdf::GlossyLobe;
 use crate::cut::Receiver;
 use crate::gather::GatherOptions;
 use crate::microbuffer::Gradients;
+use crate::tree::Precision;
 use crate::{PointCloud, Surfel};
 
 /// A cache over `tree` with one level, whose cells hold `records` (each in
@@ -500,4 +501,57 @@ fn a_records_incident_light_reflects_a_lobe_as_its_own_gather_does() {
         );
     }
     assert!(lit > 0, "no wall record saw the lit floor");
+}
+
+/// A wall at 45° whose normal leans a rounding error towards `−z` (as
+/// Sponza's octagonal piers' do), over a lit floor: the compact tree's
+/// leaves keep `−z` their dominant axis, so the records on the wall face as
+/// the points on it do and serve them, as the full tree's do.
+#[test]
+fn a_wall_at_45_degrees_is_served_by_a_compact_tree_as_by_a_full_one() {
+    let n = Vec3::new(-0.707_105_46, 0.0, -0.707_108_1);
+    let along = n.cross(Vec3::Y).normalize();
+    let corner = Vec3::new(3.0, 0.0, 3.0);
+    let mut s = Vec::new();
+    let mut points = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            let (u, v) = (0.05 + 0.1 * i as f32, 0.05 + 0.1 * j as f32);
+            let lit = Vec3::splat(1.0);
+            let p = corner + along * (u - 2.0) + Vec3::Y * v;
+            for (position, normal, radiance) in [(Vec3::new(u, 0.0, v), Vec3::Y, lit), (p, n, Vec3::ZERO)] {
+                s.push(Surfel {
+                    position,
+                    normal,
+                    radius: 0.05,
+                    radiance,
+                });
+            }
+            points.push((p + along * 0.03 + Vec3::Y * 0.02, n));
+        }
+    }
+    let cloud = PointCloud::new(s).unwrap();
+    let kinds = |precision| {
+        let tree = Tree::build_with(&cloud, precision);
+        let gather = Gather::new(&tree, &options(2)).unwrap();
+        let mut cache = Cache::new(&tree, CacheOptions::default());
+        let made = cache.prepare(&points, &gather, Convolution::Irradiance).unwrap();
+        made.lookups
+            .into_iter()
+            .map(|l| bits_of(l)[0])
+            .collect::<Vec<_>>()
+    };
+    let (full, compact) = (kinds(Precision::Full), kinds(Precision::Compact));
+    let uncovered = |k: &[u32]| k.iter().filter(|&&k| k == 1).count();
+    assert!(
+        uncovered(&full) * 10 < points.len(),
+        "{} of {} points find no record with the full tree",
+        uncovered(&full),
+        points.len()
+    );
+    assert_eq!(
+        uncovered(&compact),
+        uncovered(&full),
+        "points on the wall that find no record, compact against full"
+    );
 }

@@ -196,6 +196,9 @@ pub(crate) fn quantize(
     if q.axis == [0; 3] {
         q.axis = [0, 0, OFFSET as i16];
     }
+    if !wide {
+        keep_dominant(&mut q.axis, axis);
+    }
     let steps = |q: &Quantized| {
         let mut s = [0.0f32; 10];
         for i in 0..3 {
@@ -263,6 +266,34 @@ pub(crate) fn quantize(
     };
     up(&mut q, 8, sin, (sin * ANGLE as f64).ceil() - 1.0);
     (q, decode(base, steps(&q)))
+}
+
+/// The axis of `v`'s largest magnitude, the first among equals.
+#[inline]
+fn dominant(v: [f32; 3]) -> usize {
+    let a = v.map(f32::abs);
+    if a[0] >= a[1] && a[0] >= a[2] {
+        0
+    } else if a[1] >= a[2] {
+        1
+    } else {
+        2
+    }
+}
+
+/// Steps `axis` (the steps of `unit`) one further along `unit`'s
+/// dominant axis where rounding tied it with an earlier one. A leaf's
+/// axis is its surfel's normal, and the cache files a record by its
+/// normal's dominant axis (`cache::facing`): a face at 45° whose normal
+/// leans by a rounding error one way would otherwise file its records
+/// the other way from the points on it, which then find none.
+fn keep_dominant(axis: &mut [i16; 3], unit: [f32; 3]) {
+    let d = dominant(unit);
+    if dominant(axis.map(f32::from)) != d {
+        // Rounding is monotone, so the two tie and one step parts them;
+        // a tied component is at most 1/√2, far from the steps' end.
+        axis[d] += axis[d].signum();
+    }
 }
 
 /// The light offset's steps for a node of decoded radius `r`: the fewest

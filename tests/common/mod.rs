@@ -155,10 +155,19 @@ impl Rng {
         self.pick(&[Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z])
     }
 
-    /// A random unit normal: mostly uniform, sometimes axis aligned.
+    /// A random unit normal: mostly uniform, sometimes axis aligned,
+    /// sometimes halfway between two axes, leaning a rounding error to one
+    /// (a face at 45°: which axis dominates is a matter of rounding).
     pub fn normal(&mut self) -> Vec3 {
         if self.chance(0.2) {
             self.axis()
+        } else if self.chance(0.1) {
+            let (i, j) = self.pick(&[(0, 1), (0, 2), (1, 2)]);
+            let lean = self.range(-3e-6, 3e-6) as f64;
+            let mut v = DVec3::ZERO;
+            v[i] = self.pick(&[-1.0, 1.0]) * (1.0 + lean);
+            v[j] = self.pick(&[-1.0, 1.0]) * (1.0 - lean);
+            (v / v.length()).as_vec3()
         } else {
             self.unit()
         }
