@@ -11,7 +11,7 @@
 //! its leaves.
 //!
 //! ```text
-//! cargo run --release --example attribute -- SCENE "x,y,z[,nx,ny,nz]" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--drop-buried]
+//! cargo run --release --example attribute -- SCENE "x,y,z[,nx,ny,nz]" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--keep-buried]
 //! ```
 //!
 //! The normal defaults to +y; irradiance is the mean of the three channels.
@@ -24,7 +24,7 @@ use pbgi::microbuffer::MicroBuffer;
 use pbgi::render::{BakeOptions, Lights, Tracer, bake};
 use pbgi::{CutOptions, CutRecorder, NodeId, PointCloud, Receiver, Scheme, Traversal, Tree};
 
-const USAGE: &str = "usage: attribute SCENE \"x,y,z[,nx,ny,nz]\" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--drop-buried]";
+const USAGE: &str = "usage: attribute SCENE \"x,y,z[,nx,ny,nz]\" [--omega 0.15] [--n 14] [--top 12] [--density 2000 | --budget 52000] [--keep-buried]";
 
 fn mean(v: Vec3) -> f64 {
     f64::from(v.x + v.y + v.z) / 3.0
@@ -33,7 +33,7 @@ fn mean(v: Vec3) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut omega, mut n, mut top, mut density) = (0.15f32, 14usize, 12usize, 2000.0f32);
-    let (mut budget, mut drop_buried) = (None, false);
+    let (mut budget, mut drop_buried) = (None, BakeOptions::default().drop_buried);
     let mut positional = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--top" => top = value()?.parse()?,
             "--density" => density = value()?.parse()?,
             "--budget" => budget = Some(value()?.parse()?),
-            "--drop-buried" => drop_buried = true,
+            "--keep-buried" => drop_buried = false,
             _ => positional.push(a.clone()),
         }
     }

@@ -25,12 +25,23 @@ if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import mitsuba, pyoid
     "$venv/bin/pip" install --quiet --upgrade pip
     "$venv/bin/pip" install --quiet "mitsuba==3.9.1" pyoidn numpy
 fi
-if ! "$venv/bin/python" -c "import mitsuba as mi; mi.set_variant('llvm_ad_rgb')" 2>/dev/null; then
+# Dr.Jit loads the newest libLLVM it finds. Debian's 15 loads, but cannot
+# compile what Mitsuba asks of it (`fminimum`: the process aborts), so the
+# check evaluates one.
+llvm_works() {
+    "$venv/bin/python" -c "import mitsuba as mi; mi.set_variant('llvm_ad_rgb'); import drjit as dr; print(dr.minimum(dr.llvm.Float([1, 2]), 1.5))" > /dev/null 2>&1
+}
+if ! llvm_works; then
     if [ "$(id -u)" = 0 ]; then
         apt-get install -y --no-install-recommends libllvm19 >&2
     else
-        echo "Mitsuba's llvm_ad_rgb variant needs libLLVM: apt-get install libllvm19" >&2
+        echo "Mitsuba's llvm_ad_rgb variant needs libLLVM 19: apt-get install libllvm19" >&2
         exit 1
+    fi
+    if ! llvm_works; then
+        DRJIT_LIBLLVM_PATH=$(ls /usr/lib/*/libLLVM-19.so* 2> /dev/null | head -n 1)
+        export DRJIT_LIBLLVM_PATH
+        llvm_works || { echo "Dr.Jit's LLVM backend fails even with ${DRJIT_LIBLLVM_PATH:-no libLLVM 19}" >&2; exit 1; }
     fi
 fi
 

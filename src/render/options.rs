@@ -7,7 +7,7 @@ use crate::tree::Precision;
 
 /// The surfel budget `pbgi render` gives a scene file when neither
 /// `--surfels` nor `--density` is given: about what the built-in Cornell box
-/// gets at density 2000 (51,965 surfels).
+/// gets at density 2000 (51,964 surfels).
 pub const DEFAULT_SURFEL_BUDGET: u32 = 52_000;
 
 /// About how many gathers the environment's light and each extra bounce
@@ -218,8 +218,8 @@ pub struct RenderOptions {
     pub surfel_budget: Option<u32>,
     /// Area-light samples per surfel.
     pub surfel_light_samples: u32,
-    /// Leave out the surfels inside solids
-    /// ([`BakeOptions::drop_buried`](crate::render::BakeOptions::drop_buried)).
+    /// Leave out the surfels inside solids (on by default;
+    /// [`BakeOptions::drop_buried`](crate::render::BakeOptions::drop_buried)).
     pub drop_buried: bool,
     /// About this many gathers of the environment's light, and of each
     /// extra bounce, at the surfels whatever their number: surfels share
@@ -395,7 +395,7 @@ impl Default for RenderOptions {
             density: 2000.0,
             surfel_budget: None,
             surfel_light_samples: 16,
-            drop_buried: false,
+            drop_buried: true,
             surfel_gathers: DEFAULT_SURFEL_GATHERS,
             tree_precision: Precision::Full,
             component: Component::All,

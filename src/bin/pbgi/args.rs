@@ -243,7 +243,7 @@ pub struct Settings {
     #[arg(long, value_parser = ["full", "compact"], default_value = "full")]
     pub tree_precision: String,
     /// Surfels inside solids (a face against another, as a wall on its slab): kept, or dropped and their share given to the surfaces in the open.
-    #[arg(long, value_parser = ["keep", "drop"], default_value = "keep")]
+    #[arg(long, value_parser = ["keep", "drop"], default_value = "drop")]
     pub buried_surfels: String,
     /// Hybrid: switch an entry to single below this many active lanes.
     #[arg(long, default_value_t = CutOptions::default().hybrid_threshold, help_heading = DEVELOPER)]
