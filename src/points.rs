@@ -15,6 +15,20 @@ pub const MAX_RADIANCE: f32 = 1e30;
 /// areas, sums of `π r²`, saturate at `f32::MAX` instead of overflowing.
 pub const MAX_COORDINATE: f32 = 1e37;
 
+/// The axis of `v`'s largest magnitude, the first among equals: the cache
+/// files a record by it (its facing), and a compact leaf's normal keeps it.
+#[inline]
+pub(crate) fn dominant_axis(v: Vec3) -> usize {
+    let a = v.abs();
+    if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    }
+}
+
 /// One surfel: a disk at `position` facing `normal`, of `radius`, emitting
 /// `radiance` (outgoing diffuse radiance, RGB) from its front side.
 #[derive(Clone, Copy, Debug, PartialEq)]

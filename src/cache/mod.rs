@@ -48,6 +48,7 @@ use crate::cut::TraversalStats;
 use crate::error::Error;
 use crate::gather::Gather;
 use crate::microbuffer::{Convolution, Table, reflect, tilted};
+use crate::points::dominant_axis;
 use crate::simd::LANES;
 use crate::tree::Tree;
 use crate::tree::file::Fnv1a;
@@ -203,15 +204,8 @@ const NONE: u32 = u32::MAX;
 /// records) facing one way share most of their cuts.
 #[inline]
 pub(crate) fn facing(n: Vec3) -> u8 {
-    let a = n.abs();
-    let (axis, v) = if a.x >= a.y && a.x >= a.z {
-        (0, n.x)
-    } else if a.y >= a.z {
-        (1, n.y)
-    } else {
-        (2, n.z)
-    };
-    axis * 2 + u8::from(v < 0.0)
+    let axis = dominant_axis(n);
+    axis as u8 * 2 + u8::from(n[axis] < 0.0)
 }
 
 impl Cache {

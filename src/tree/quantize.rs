@@ -24,7 +24,7 @@
 use glam::Vec3;
 
 use super::bytes::{Reader, put_f32, put_i16, put_u16, put_u32};
-use crate::points::Surfel;
+use crate::points::{Surfel, dominant_axis};
 use crate::simd::Real;
 
 /// Offset and axis steps per unit.
@@ -268,19 +268,6 @@ pub(crate) fn quantize(
     (q, decode(base, steps(&q)))
 }
 
-/// The axis of `v`'s largest magnitude, the first among equals.
-#[inline]
-fn dominant(v: [f32; 3]) -> usize {
-    let a = v.map(f32::abs);
-    if a[0] >= a[1] && a[0] >= a[2] {
-        0
-    } else if a[1] >= a[2] {
-        1
-    } else {
-        2
-    }
-}
-
 /// Steps `axis` (the steps of `unit`) one further along `unit`'s
 /// dominant axis where rounding tied it with an earlier one. A leaf's
 /// axis is its surfel's normal, and the cache files a record by its
@@ -288,8 +275,8 @@ fn dominant(v: [f32; 3]) -> usize {
 /// leans by a rounding error one way would otherwise file its records
 /// the other way from the points on it, which then find none.
 fn keep_dominant(axis: &mut [i16; 3], unit: [f32; 3]) {
-    let d = dominant(unit);
-    if dominant(axis.map(f32::from)) != d {
+    let d = dominant_axis(Vec3::from(unit));
+    if dominant_axis(Vec3::from(axis.map(f32::from))) != d {
         // Rounding is monotone, so the two tie and one step parts them;
         // a tied component is at most 1/√2, far from the steps' end.
         axis[d] += axis[d].signum();
