@@ -19,6 +19,7 @@ cases=(
     "cornell-box --gathers cache:0.1"
     "cornell-box --ao --spp 1"
     "cornell-box --bounces 2 --spp 1"
+    "cornell-box --tree-precision full"
     "cornell-box --scheme scalar --spp 1"
     "cornell-box --scheme hybrid --spp 1"
     "cornell-box-glossy --spp 1"

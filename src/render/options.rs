@@ -397,7 +397,7 @@ impl Default for RenderOptions {
             surfel_light_samples: 16,
             drop_buried: true,
             surfel_gathers: DEFAULT_SURFEL_GATHERS,
-            tree_precision: Precision::Full,
+            tree_precision: Precision::Compact,
             component: Component::All,
             seed: 1,
             crop: None,

@@ -371,7 +371,8 @@ pub struct Tree {
 }
 
 impl Tree {
-    /// Builds the hierarchy. `O(n log n)`, deterministic, parallel over subtrees.
+    /// Builds the hierarchy at [`Precision::Full`]. `O(n log n)`,
+    /// deterministic, parallel over subtrees.
     pub fn build(cloud: &PointCloud) -> Tree {
         Tree::build_with(cloud, Precision::Full)
     }

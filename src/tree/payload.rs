@@ -27,11 +27,14 @@ use crate::points::Surfel;
 /// How a tree stores what splatting reads of its nodes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Precision {
-    /// `f32` fields: 80 bytes a node, and 260 a mixed node's facets.
-    #[default]
+    /// `f32` fields: 80 bytes a node, and 260 a mixed node's facets. The
+    /// reference the compact tree is measured against.
     Full,
     /// Quantized against each node's bounding sphere: 32 bytes an inner
-    /// node, 12 a leaf, 88 a mixed node's facets.
+    /// node, 12 a leaf, 88 a mixed node's facets. The renderer's default:
+    /// its images match the full tree's within noise, in under half the
+    /// memory.
+    #[default]
     Compact,
 }
 

@@ -240,7 +240,7 @@ pub struct Settings {
     pub surfel_gathers: u32,
     /// How the tree stores what splatting reads: full (f32) or compact
     /// (quantized against each node's sphere, 32 bytes a node).
-    #[arg(long, value_parser = ["full", "compact"], default_value = "full")]
+    #[arg(long, value_parser = ["full", "compact"], default_value = "compact")]
     pub tree_precision: String,
     /// Surfels inside solids (a face against another, as a wall on its slab): kept, or dropped and their share given to the surfaces in the open.
     #[arg(long, value_parser = ["keep", "drop"], default_value = "drop")]
@@ -278,10 +278,10 @@ impl Settings {
             density: self.density.unwrap_or(RenderOptions::default().density),
             surfel_budget: self.surfels,
             surfel_gathers: self.surfel_gathers,
-            tree_precision: if self.tree_precision == "compact" {
-                Precision::Compact
-            } else {
+            tree_precision: if self.tree_precision == "full" {
                 Precision::Full
+            } else {
+                Precision::Compact
             },
             drop_buried: self.buried_surfels == "drop",
             ..RenderOptions::default()
