@@ -18,7 +18,12 @@
 //! opening in that surface may lie between the pixels' centres: from a
 //! receiver 8 cm from a window's wall, the window is a band of directions
 //! 4° wide, which no centre of a 10° pixel met). The pixel's open part is
-//! the fraction that escapes. A pixel open all through shows the sky alone
+//! the fraction that escapes. A pixel on a smooth surface's silhouette
+//! against the sky, with no edged surface on either side, casts 4 of the
+//! 16 ([`SILHOUETTE`]): an opening's sky is bounded by its edges, so its
+//! edge pixels carry much of its light, but a smooth body's silhouette
+//! bounds the body, and its pixels are a small share of the sky beside it.
+//! A pixel open all through shows the sky alone
 //! (the splats there are an opening's overhanging disks); one open in part
 //! adds the sky through that part to its splats' light.
 //!
@@ -45,6 +50,12 @@ const GRAZING: f32 = 0.25;
 /// A pixel whose centre ray meets a surface within a quarter of
 /// [`GRAZING`] refines on a `DEEP × DEEP` grid, not on its 16 sub-samples.
 const DEEP: usize = 8;
+
+/// The sub-samples a pixel on a smooth surface's silhouette casts (indices
+/// into the 4×4 grid, row by row): one in each row, each column and each
+/// quadrant, so an edge of any slope through the pixel is met at four
+/// offsets.
+const SILHOUETTE: [usize; 4] = [1, 7, 8, 14];
 
 /// Per pixel of `t`, the fraction through which the environment shows from
 /// the receiver at `position` with local frame `frame` (world space), into
@@ -103,8 +114,14 @@ pub(super) fn open(
     for &p in &frags.pixel {
         refine[p as usize] |= open[p as usize] == 1.0;
     }
+    // Pixels refined only for a neighbour's sake, where the sky meets a
+    // smooth surface, take the silhouette's 4 sub-samples.
+    let mut silhouette = vec![false; open.len()];
     for (p, r) in refine.iter_mut().enumerate() {
-        *r |= edge(open, t.n, p);
+        if !*r && edge(open, t.n, p) {
+            *r = true;
+            silhouette[p] = smooth(&sight, open, t.n, p);
+        }
     }
     // Every refined pixel's sub-samples, in pixel order, as one batch.
     let mut refined = Vec::new();
@@ -128,6 +145,12 @@ pub(super) fn open(
             continue;
         }
         let [sx, sy, sz] = &t.sub[p];
+        if silhouette[p] {
+            for k in SILHOUETTE {
+                dirs.push(world(frame, sx[k], sy[k], sz[k]));
+            }
+            continue;
+        }
         for k in 0..LANES {
             dirs.push(world(frame, sx[k], sy[k], sz[k]));
         }
@@ -139,7 +162,13 @@ pub(super) fn open(
     }
     let mut rest = escaped.as_slice();
     for &p in &refined {
-        let k = if deep[p] { DEEP * DEEP } else { LANES };
+        let k = if deep[p] {
+            DEEP * DEEP
+        } else if silhouette[p] {
+            SILHOUETTE.len()
+        } else {
+            LANES
+        };
         let (sub, more) = rest.split_at(k);
         rest = more;
         let mut n = 0u32;
@@ -170,6 +199,27 @@ fn edge(open: &[f32], n: usize, p: usize) -> bool {
         }
     }
     false
+}
+
+/// Whether pixel `p`, which differs from a neighbour in `open`, does so
+/// only as the sky against a smooth surface: neither it nor any neighbour
+/// that differs from it meets an edged surface ([`Sight::Surface`]), where
+/// an opening may be.
+#[inline(always)]
+fn smooth(sight: &[Sight], open: &[f32], n: usize, p: usize) -> bool {
+    if matches!(sight[p], Sight::Surface { .. }) {
+        return false;
+    }
+    let (c, r, v) = (p % n, p / n, open[p]);
+    for rr in r.saturating_sub(1)..(r + 2).min(n) {
+        for cc in c.saturating_sub(1)..(c + 2).min(n) {
+            let q = rr * n + cc;
+            if open[q] != v && matches!(sight[q], Sight::Surface { .. }) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// `Σ f(p)·w(p)·(L(p) + sky(p)·open(p))` in pixel order, `L(p)` the
@@ -227,5 +277,87 @@ impl<'a> Sky<'a> {
         let l = t.dir[p];
         let d = self.frame[0] * l.x + self.frame[1] * l.y + self.frame[2] * l.z;
         self.environment.radiance(d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use super::*;
+
+    /// Directions with local `x` above 0.3 meet a surface, smooth or edged;
+    /// the others leave. Counts the sub-sample rays.
+    struct Body {
+        smooth: bool,
+        rays: AtomicUsize,
+    }
+
+    impl NearField for Body {
+        fn trace(&self, _: Vec3, _: Vec3, _: Vec3, _: f32) -> Option<Vec3> {
+            None
+        }
+
+        fn escapes(&self, _: Vec3, _: Vec3, dir: Vec3) -> Option<bool> {
+            Some(dir.x <= 0.3)
+        }
+
+        fn escapes_each(&self, _: Vec3, _: Vec3, dirs: &[Vec3], out: &mut Vec<bool>) -> bool {
+            self.rays.fetch_add(dirs.len(), Ordering::Relaxed);
+            out.clear();
+            out.extend(dirs.iter().map(|d| d.x <= 0.3));
+            true
+        }
+
+        fn sight_each(&self, _: Vec3, _: Vec3, dirs: &[Vec3], out: &mut Vec<Sight>) -> bool {
+            out.clear();
+            out.extend(dirs.iter().map(|d| match (d.x <= 0.3, self.smooth) {
+                (true, _) => Sight::Sky,
+                (false, true) => Sight::Smooth,
+                (false, false) => Sight::Surface { cos: 1.0 },
+            }));
+            true
+        }
+    }
+
+    /// The sub-sample rays the receiver at the origin facing +z casts, and
+    /// its pixels' open parts.
+    fn open_parts(t: &Table, smooth: bool) -> (usize, Vec<f32>) {
+        let body = Body {
+            smooth,
+            rays: AtomicUsize::new(0),
+        };
+        let mut parts = Vec::new();
+        open(
+            t,
+            Vec3::ZERO,
+            &[Vec3::X, Vec3::Y, Vec3::Z],
+            &body,
+            &Fragments::default(),
+            &mut parts,
+        );
+        (body.rays.into_inner(), parts)
+    }
+
+    #[test]
+    fn a_smooth_silhouette_casts_four_sub_samples_a_pixel_and_an_edged_one_sixteen() {
+        let t = Table::new(14);
+        let (edged_rays, edged) = open_parts(&t, false);
+        let (smooth_rays, smooth) = open_parts(&t, true);
+        // The same pixels refine, those beside the line x = 0.3: 16 rays
+        // each against an edged surface, 4 against a smooth one.
+        assert!(edged_rays > 0 && edged_rays % LANES == 0, "{edged_rays}");
+        assert_eq!(smooth_rays, 4 * (edged_rays / LANES));
+        let mut split = 0;
+        for (p, (&e, &s)) in edged.iter().zip(&smooth).enumerate() {
+            // The 4 are among the 16: a pixel all on one side is so in both.
+            if e == 0.0 || e == 1.0 {
+                assert_eq!(s, e, "pixel {p}");
+            } else {
+                split += 1;
+                assert_eq!((s * 4.0).fract(), 0.0, "pixel {p}: {s} is no share of 4 rays");
+            }
+        }
+        assert!(split > 0, "the line splits pixels");
     }
 }
