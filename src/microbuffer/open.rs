@@ -111,16 +111,24 @@ pub(super) fn open(
     for p in 0..open.len() {
         refine.push(grazing[p] == 1.0 || edge(&grazing, t.n, p));
     }
+    let mut past = vec![false; open.len()];
     for &p in &frags.pixel {
-        refine[p as usize] |= open[p as usize] == 1.0;
+        past[p as usize] |= open[p as usize] == 1.0;
     }
-    // Pixels refined only for a neighbour's sake, where the sky meets a
-    // smooth surface, take the silhouette's 4 sub-samples.
+    // Pixels refined for a neighbour's sake or a fragment's, not for a
+    // grazing hit, take the silhouette's 4 sub-samples where they lie on
+    // a smooth surface's silhouette against the sky (a fragment there is
+    // the body's own disks overhanging it); a fragment with no such
+    // neighbour keeps 16.
     let mut silhouette = vec![false; open.len()];
     for (p, r) in refine.iter_mut().enumerate() {
-        if !*r && edge(open, t.n, p) {
+        if *r {
+            continue;
+        }
+        let beside = edge(open, t.n, p);
+        if beside || past[p] {
             *r = true;
-            silhouette[p] = smooth(&sight, open, t.n, p);
+            silhouette[p] = beside && smooth(&sight, open, t.n, p);
         }
     }
     // Every refined pixel's sub-samples, in pixel order, as one batch.
@@ -322,7 +330,7 @@ mod tests {
 
     /// The sub-sample rays the receiver at the origin facing +z casts, and
     /// its pixels' open parts.
-    fn open_parts(t: &Table, smooth: bool) -> (usize, Vec<f32>) {
+    fn open_parts(t: &Table, smooth: bool, frags: &Fragments) -> (usize, Vec<f32>) {
         let body = Body {
             smooth,
             rays: AtomicUsize::new(0),
@@ -333,7 +341,7 @@ mod tests {
             Vec3::ZERO,
             &[Vec3::X, Vec3::Y, Vec3::Z],
             &body,
-            &Fragments::default(),
+            frags,
             &mut parts,
         );
         (body.rays.into_inner(), parts)
@@ -342,8 +350,9 @@ mod tests {
     #[test]
     fn a_smooth_silhouette_casts_four_sub_samples_a_pixel_and_an_edged_one_sixteen() {
         let t = Table::new(14);
-        let (edged_rays, edged) = open_parts(&t, false);
-        let (smooth_rays, smooth) = open_parts(&t, true);
+        let none = Fragments::default();
+        let (edged_rays, edged) = open_parts(&t, false, &none);
+        let (smooth_rays, smooth) = open_parts(&t, true, &none);
         // The same pixels refine, those beside the line x = 0.3: 16 rays
         // each against an edged surface, 4 against a smooth one.
         assert!(edged_rays > 0 && edged_rays % LANES == 0, "{edged_rays}");
@@ -359,5 +368,25 @@ mod tests {
             }
         }
         assert!(split > 0, "the line splits pixels");
+    }
+
+    #[test]
+    fn a_fragment_beside_a_smooth_silhouette_takes_four_and_one_in_the_open_sky_sixteen() {
+        let t = Table::new(14);
+        let none = Fragments::default();
+        let beside = open_parts(&t, false, &none).0 / LANES;
+        // A fragment in every pixel: each open pixel refines, those beside
+        // the line as before and the others for their fragment.
+        let mut all = Fragments::default();
+        for p in 0..t.n * t.n {
+            all.push(p, 0, 0.5, [0.0; 3]);
+        }
+        let (edged, _) = open_parts(&t, false, &all);
+        let (smooth, _) = open_parts(&t, true, &all);
+        assert!(
+            edged > beside * LANES,
+            "fragments in the open sky refine: {edged}"
+        );
+        assert_eq!(smooth, edged - (LANES - SILHOUETTE.len()) * beside);
     }
 }
