@@ -110,6 +110,17 @@ fn bench_scale_times_each_part_of_each_case() {
         );
     }
     assert!(std::fs::metadata(dir.join("scale.png")).unwrap().len() > 1000);
+    // Each stage's peak, one column a stage, and the growth's table.
+    let md = std::fs::read_to_string(dir.join("scale.md")).unwrap();
+    #[cfg(target_os = "linux")]
+    for stage in ["ray-tracing BVH", "surfels + direct light", "tree", "frame"] {
+        assert!(
+            md.lines()
+                .any(|l| l.starts_with("| scene | surfels |") && l.contains(stage)),
+            "{stage}'s peak: {md}"
+        );
+    }
+    assert!(md.contains("| part | grows as surfels^k: k |"), "{md}");
 }
 
 #[test]

@@ -219,6 +219,8 @@ pub(super) fn build(
             // the dark tree, where one is built, only groups the surfels.
             let dark_tree = Groups::need_tree(group).then(|| tree(&dark, times));
             let clock = Instant::now();
+            // The stage starts with its groups, before their count is known.
+            progress(SKY, 0, 0);
             let sky_groups = groups.insert(Groups::new(dark.surfels(), group, dark_tree.as_ref()));
             cloud = gather_sky(
                 &dark,

@@ -414,6 +414,8 @@ pub(super) fn bake_with_progress(
             expected: "a finite number > 0 (surfels per unit area)",
         });
     }
+    // The stage starts with the placing, before the surfels' count is known.
+    tick(0, 0);
     let Open {
         sites: all,
         pools,

@@ -37,7 +37,10 @@ pub use equal_error::{
 pub use error::ReportError;
 pub use flicker::{Flicker, flicker};
 pub use markdown::{OIDN_SUFFIX, equal_error_markdown, summary_header, summary_row, to_markdown};
-pub use scale::{ScaleRow, copies, scale_csv, scale_markdown, scale_row};
+pub use scale::{
+    GROWTH_FROM, Growth, ScaleRow, copies, growth, growth_markdown, scale_csv, scale_markdown, scale_row,
+    stage_peaks_markdown,
+};
 pub use sweep::{
     Curve, DEFAULT_PATH_TRACER_SPP, DEFAULT_SPP, DEFAULT_TARGETS, ErrorPoint, Grid, Method, PATH_TRACER,
     SweepOptions, SweepProgress, Variant, check_reference, default_curves, describe, error_sweep,

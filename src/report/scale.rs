@@ -5,7 +5,9 @@
 //! A case's peak memory is the process's resident peak from just before the
 //! case (Linux resets it through `/proc/self/clear_refs`; elsewhere it is
 //! not measured), so it holds the scene, the BVH, the surfels, their trees
-//! and the image: all a render needs at once.
+//! and the image: all a render needs at once. Each stage's peak is measured
+//! the same way from the stage's start, so it holds what earlier stages
+//! left resident too. [`growth`] fits how each part grows with the surfels.
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -38,6 +40,10 @@ pub struct ScaleRow {
     pub peak_bytes: Option<u64>,
     /// The tree's bytes per surfel.
     pub tree_bytes_per_surfel: f64,
+    /// Per stage, in the order the stages ran, its resident peak in bytes
+    /// (a stage that ran twice, its larger); the frame's last. Empty where
+    /// the peak cannot be measured.
+    pub stage_peaks: Vec<(&'static str, u64)>,
 }
 
 /// `copies` copies of `scene`'s meshes side by side on a square grid (a
@@ -99,10 +105,24 @@ pub fn scale_row(
         surfel_budget: Some(budget),
         ..*opts
     };
-    let frame = Frame::prepare_with_progress(scene, &opts, progress)?;
+    let stages = std::sync::Mutex::new(StagePeaks::default());
+    let watch = |stage: &'static str, done: usize, total: usize| {
+        if measured {
+            stages.lock().unwrap_or_else(|e| e.into_inner()).enter(stage);
+        }
+        progress(stage, done, total);
+    };
+    let frame = Frame::prepare_with_progress(scene, &opts, &watch)?;
     let tree_bytes_per_surfel = frame.tree().bytes_per_surfel();
+    if measured {
+        stages.lock().unwrap_or_else(|e| e.into_inner()).enter("frame");
+    }
     let out = frame.render(&|_, _| {})?;
     let total = read + clock.elapsed().as_secs_f64();
+    let mut stages = stages.into_inner().unwrap_or_else(|e| e.into_inner());
+    if measured {
+        stages.enter("");
+    }
     Ok(ScaleRow {
         label: label.to_string(),
         triangles: scene.triangle_count(),
@@ -112,9 +132,35 @@ pub fn scale_row(
         pre: out.timings.pre_parts,
         frame: out.timings.total_wall - out.timings.pre,
         total,
-        peak_bytes: if measured { peak() } else { None },
+        peak_bytes: stages.done.iter().map(|&(_, b)| b).max(),
         tree_bytes_per_surfel,
+        stage_peaks: stages.done,
     })
+}
+
+/// The stage running and the peaks of those that ended.
+#[derive(Default)]
+struct StagePeaks {
+    current: Option<&'static str>,
+    done: Vec<(&'static str, u64)>,
+}
+
+impl StagePeaks {
+    /// Marks `stage` as running: the stage before it ends, its peak kept,
+    /// and the peak is reset (`""`: none runs after).
+    fn enter(&mut self, stage: &'static str) {
+        if self.current == Some(stage) {
+            return;
+        }
+        if let (Some(ended), Some(bytes)) = (self.current, peak()) {
+            match self.done.iter_mut().find(|(s, _)| *s == ended) {
+                Some((_, b)) => *b = (*b).max(bytes),
+                None => self.done.push((ended, bytes)),
+            }
+        }
+        self.current = (!stage.is_empty()).then_some(stage);
+        reset_peak();
+    }
 }
 
 /// Resets the process's recorded resident peak to its current size
@@ -188,6 +234,124 @@ pub fn scale_csv(rows: &[ScaleRow]) -> String {
     s
 }
 
+/// The smallest surfel budget of a case [`growth`] fits: below it, costs
+/// that do not grow with the surfels (the BVH, the image) dominate.
+pub const GROWTH_FROM: usize = 100_000;
+
+/// How one part's cost grows with the surfels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Growth {
+    /// The part (a column of the table).
+    pub part: &'static str,
+    /// `k` of the least-squares line through `ln cost` against `ln n`:
+    /// the cost grows as `n^k`.
+    pub exponent: f64,
+    /// The largest factor between a case and the least-squares fit
+    /// `cost = c·n·ln n` (1: n log n exactly).
+    pub n_log_n_off: f64,
+    /// The cases fitted.
+    pub cases: usize,
+}
+
+/// A part's name and how to read its cost off a case.
+type Part = (&'static str, fn(&ScaleRow) -> Option<f64>);
+
+/// The parts whose growth [`growth`] fits.
+const GROWING: [Part; 6] = [
+    ("surfels + direct light", |r| Some(r.pre.surfels)),
+    ("gathers at surfels", |r| Some(r.pre.gathers)),
+    ("tree", |r| Some(r.pre.tree)),
+    ("frame", |r| Some(r.frame)),
+    ("total", |r| Some(r.total)),
+    ("peak memory", |r| r.peak_bytes.map(|b| b as f64)),
+];
+
+/// Per part, its growth over the cases of `by_surfels` (one mesh at
+/// growing budgets) with a budget of at least [`GROWTH_FROM`]; a part with
+/// fewer than two such cases of positive cost is left out.
+pub fn growth(by_surfels: &[ScaleRow]) -> Vec<Growth> {
+    let mut out = Vec::new();
+    for (part, cost) in GROWING {
+        let points: Vec<(f64, f64)> = by_surfels
+            .iter()
+            .filter(|r| r.budget as usize >= GROWTH_FROM)
+            .filter_map(|r| Some((r.surfels as f64, cost(r)?)))
+            .filter(|&(_, c)| c > 0.0)
+            .collect();
+        if points.len() < 2 {
+            continue;
+        }
+        let m = points.len() as f64;
+        let (mx, my) = points
+            .iter()
+            .fold((0.0, 0.0), |(x, y), &(n, c)| (x + n.ln() / m, y + c.ln() / m));
+        let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(xy, xx), &(n, c)| {
+            let dx = n.ln() - mx;
+            (xy + dx * (c.ln() - my), xx + dx * dx)
+        });
+        // ln c of the n log n fit is the mean of ln(cost / (n ln n)).
+        let residual = |&(n, c): &(f64, f64)| c.ln() - (n * n.ln()).ln();
+        let lnc = points.iter().map(residual).sum::<f64>() / m;
+        let off = points
+            .iter()
+            .map(|p| (residual(p) - lnc).abs())
+            .fold(0.0, f64::max);
+        out.push(Growth {
+            part,
+            exponent: sxy / sxx,
+            n_log_n_off: off.exp(),
+            cases: points.len(),
+        });
+    }
+    out
+}
+
+/// The growths as a Markdown table.
+pub fn growth_markdown(growth: &[Growth]) -> String {
+    let mut s = String::from(
+        "| part | grows as surfels^k: k | the best c·n·ln n fit, off by up to | cases |\n| --- | ---: | ---: | ---: |\n",
+    );
+    for g in growth {
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.2}× | {} |",
+            g.part, g.exponent, g.n_log_n_off, g.cases
+        );
+    }
+    s
+}
+
+/// Each stage's resident peak as a Markdown table, one row a case, the
+/// stages as columns in the order they first ran.
+pub fn stage_peaks_markdown(rows: &[ScaleRow]) -> String {
+    let mut stages: Vec<&str> = Vec::new();
+    for r in rows {
+        for (s, _) in &r.stage_peaks {
+            if !stages.contains(s) {
+                stages.push(s);
+            }
+        }
+    }
+    let mut s = format!(
+        "| scene | surfels | {} |\n| --- | ---: |{}\n",
+        stages.join(" | "),
+        " ---: |".repeat(stages.len())
+    );
+    for r in rows {
+        let cells: Vec<String> = stages
+            .iter()
+            .map(|stage| {
+                r.stage_peaks
+                    .iter()
+                    .find(|(s, _)| s == stage)
+                    .map_or_else(|| "—".to_string(), |(_, b)| format!("{:.0} MB", *b as f64 / 1e6))
+            })
+            .collect();
+        let _ = writeln!(s, "| {} | {} | {} |", r.label, r.surfels, cells.join(" | "));
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -203,6 +367,59 @@ mod tests {
         // A 2×2 grid: twice as wide and deep plus the gap, as tall.
         assert!(((hi4.x - lo4.x) / (hi.x - lo.x) - 2.2).abs() < 1e-4);
         assert!(((hi4.y - lo4.y) / (hi.y - lo.y) - 1.0).abs() < 1e-6);
+    }
+
+    /// A case of `budget` surfels asked for, a few fewer made (as a real
+    /// bake does), whose parts cost `seconds` of those made.
+    fn case(budget: u32, seconds: impl Fn(f64) -> f64) -> ScaleRow {
+        let surfels = budget as usize - 3;
+        let seconds = seconds(surfels as f64);
+        ScaleRow {
+            label: "mesh".into(),
+            triangles: 1,
+            budget,
+            surfels,
+            read: 0.0,
+            pre: PreTimings {
+                tracer: 0.5,
+                surfels: seconds,
+                gathers: seconds * seconds,
+                tree: seconds,
+            },
+            frame: 1.0,
+            total: seconds,
+            peak_bytes: None,
+            tree_bytes_per_surfel: 100.0,
+            stage_peaks: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn growth_finds_n_log_n_and_a_square() {
+        // The parts' costs: c·n·ln n, its square (gathers), and a constant
+        // frame; a case below GROWTH_FROM that would bend the fit. The
+        // case of budget GROWTH_FROM made fewer surfels and is fitted.
+        let n_log_n = |n: f64| 1e-6 * n * n.ln();
+        let mut rows: Vec<ScaleRow> = [100_000, 1_000_000, 10_000_000]
+            .map(|b| case(b, n_log_n))
+            .to_vec();
+        rows.insert(0, case(10_000, |_| 5.0));
+        let g = growth(&rows);
+        let part = |name: &str| g.iter().find(|g| g.part == name).unwrap();
+        let tree = part("tree");
+        assert_eq!(tree.cases, 3);
+        assert!((tree.n_log_n_off - 1.0).abs() < 1e-9, "{tree:?}");
+        // d ln(n ln n)/d ln n = 1 + 1/ln n: 1.06–1.09 over 10⁵–10⁷.
+        assert!(tree.exponent > 1.05 && tree.exponent < 1.09, "{tree:?}");
+        let gathers = part("gathers at surfels");
+        assert!(
+            (gathers.exponent - 2.0 * tree.exponent).abs() < 1e-9,
+            "{gathers:?}"
+        );
+        assert!(gathers.n_log_n_off > 10.0, "{gathers:?}");
+        assert!(part("frame").exponent.abs() < 1e-12);
+        assert!(g.iter().all(|g| g.part != "peak memory"), "no peak was measured");
+        assert!(growth_markdown(&g).contains("| tree | 1.07 | 1.00× | 3 |"));
     }
 
     #[cfg(target_os = "linux")]

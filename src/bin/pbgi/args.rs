@@ -75,11 +75,14 @@ pub struct BenchArgs {
     /// gathers them in).
     #[arg(long, default_value = "camera", value_parser = ["camera", "records"])]
     pub receivers: String,
-    /// The scale benchmark instead: each part's time and the peak memory of
-    /// a default render of the meshes given as SCENES (default: the three
-    /// fetched dragons, scripts/fetch-scenes.sh), of `--copies` copies of
-    /// the last, and of the last at budgets of 10⁴ surfels up to
-    /// `--max-surfels`. Writes scale.md, scale.csv and scale.png/.svg to `--out`.
+    /// The scale benchmark instead: each part's time, each stage's peak
+    /// memory and the tree's bytes a surfel of a default render of the
+    /// meshes given as SCENES (default: the three fetched dragons,
+    /// scripts/fetch-scenes.sh), of `--copies` copies of the last, and of
+    /// the last at budgets of 10⁴ surfels up to `--max-surfels`, with how
+    /// each part grows with the surfels (the exponent of a power law, and
+    /// how far n log n is). Writes scale.md, scale.csv and scale.png/.svg
+    /// to `--out`.
     #[arg(long)]
     pub scale: bool,
     /// `--scale`: copies of the last mesh for the largest scene.

@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use pbgi::render::DEFAULT_SURFEL_BUDGET;
-use pbgi::report::{ScaleRow, copies, scale_csv, scale_markdown, scale_row};
+use pbgi::report::{
+    GROWTH_FROM, ScaleRow, copies, growth, growth_markdown, scale_csv, scale_markdown, scale_row,
+    stage_peaks_markdown,
+};
 
 use crate::args::{BenchArgs, Res, options};
 use crate::{StageBars, load_scene, thread_pool};
@@ -88,9 +91,14 @@ pub fn cmd_scale(a: &BenchArgs) -> Res<()> {
     }
     let rows: Vec<ScaleRow> = by_triangles.iter().chain(&by_surfels).cloned().collect();
     let table = format!(
-        "{}\n(wall-clock seconds, {threads} thread(s), {}, one run; peak memory: the process's resident peak over the case)\n",
+        "{}\n(wall-clock seconds, {threads} thread(s), {}, one run; peak memory: the process's resident peak over the case)\n\n\
+         Each stage's resident peak (from the stage's start, so with what earlier stages left resident):\n\n{}\n\
+         How each part grows with the surfels of {label}, fitted over the cases from {GROWTH_FROM} surfels up \
+         (least squares of ln cost against ln n; n ln n alone grows as n^1.06–1.09 there):\n\n{}",
         scale_markdown(&rows),
-        pbgi::Isa::best()
+        pbgi::Isa::best(),
+        stage_peaks_markdown(&rows),
+        growth_markdown(&growth(&by_surfels))
     );
     print!("{table}");
     let write = |file: &str, text: &str| {
