@@ -19,7 +19,8 @@
 //! receiver 8 cm from a window's wall, the window is a band of directions
 //! 4° wide, which no centre of a 10° pixel met). The pixel's open part is
 //! the fraction that escapes. A pixel on a smooth surface's silhouette
-//! against the sky, with no edged surface on either side, casts 4 of the
+//! against the sky, with no edged surface on it or on a neighbour that
+//! differs from it, casts 4 of the
 //! 16 ([`SILHOUETTE`]): an opening's sky is bounded by its edges, so its
 //! edge pixels carry much of its light, but a smooth body's silhouette
 //! bounds the body, and its pixels are a small share of the sky beside it.
@@ -53,8 +54,8 @@ const DEEP: usize = 8;
 
 /// The sub-samples a pixel on a smooth surface's silhouette casts (indices
 /// into the 4×4 grid, row by row): one in each row, each column and each
-/// quadrant, so an edge of any slope through the pixel is met at four
-/// offsets.
+/// quadrant, so a vertical or horizontal edge through the pixel is met at
+/// four offsets and an edge of any other slope at two at least.
 const SILHOUETTE: [usize; 4] = [1, 7, 8, 14];
 
 /// Per pixel of `t`, the fraction through which the environment shows from
@@ -185,6 +186,7 @@ pub(super) fn open(
         }
         open[p] = n as f32 / k as f32;
     }
+    debug_assert!(rest.is_empty(), "every sub-sample ray is read");
 }
 
 /// The world direction of local `(x, y, z)` in `frame`, unit.
@@ -345,6 +347,25 @@ mod tests {
             &mut parts,
         );
         (body.rays.into_inner(), parts)
+    }
+
+    #[test]
+    fn the_silhouettes_sub_samples_take_each_row_column_and_quadrant_once() {
+        let cells = SILHOUETTE.map(|k| (k % 4, k / 4));
+        for x in 0..4 {
+            assert_eq!(
+                cells.iter().filter(|c| c.0 == x).count(),
+                1,
+                "column {x}: {cells:?}"
+            );
+            assert_eq!(cells.iter().filter(|c| c.1 == x).count(), 1, "row {x}: {cells:?}");
+            let quadrant = |c: &&(usize, usize)| (c.0 / 2) + 2 * (c.1 / 2) == x;
+            assert_eq!(
+                cells.iter().filter(quadrant).count(),
+                1,
+                "quadrant {x}: {cells:?}"
+            );
+        }
     }
 
     #[test]

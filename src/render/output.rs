@@ -11,7 +11,9 @@ use crate::simd::Isa;
 
 /// Where a render is, for a progress bar: `(stage, done, total)`, called
 /// with 0 done as a stage starts and `total` done as it ends (`total` 1 for
-/// a stage that counts nothing on the way), from any thread.
+/// a stage that counts nothing on the way), from any thread. A stage whose
+/// count is not known when it starts reports `(0, 0)` first, then `(0,
+/// total)` once it is.
 pub type Progress<'a> = dyn Fn(&'static str, usize, usize) + Sync + 'a;
 
 /// Wall-clock seconds of the parts of `pre.`: what grows with the scene.

@@ -278,7 +278,7 @@ pub fn growth(by_surfels: &[ScaleRow]) -> Vec<Growth> {
             .filter_map(|r| Some((r.surfels as f64, cost(r)?)))
             .filter(|&(_, c)| c > 0.0)
             .collect();
-        if points.len() < 2 {
+        if points.len() < 2 || points.iter().all(|p| p.0 == points[0].0) {
             continue;
         }
         let m = points.len() as f64;
@@ -322,7 +322,8 @@ pub fn growth_markdown(growth: &[Growth]) -> String {
 }
 
 /// Each stage's resident peak as a Markdown table, one row a case, the
-/// stages as columns in the order they first ran.
+/// stages as columns in the order they first ran; empty where no peak was
+/// measured.
 pub fn stage_peaks_markdown(rows: &[ScaleRow]) -> String {
     let mut stages: Vec<&str> = Vec::new();
     for r in rows {
@@ -331,6 +332,9 @@ pub fn stage_peaks_markdown(rows: &[ScaleRow]) -> String {
                 stages.push(s);
             }
         }
+    }
+    if stages.is_empty() {
+        return String::new();
     }
     let mut s = format!(
         "| scene | surfels | {} |\n| --- | ---: |{}\n",

@@ -74,8 +74,9 @@ impl StageBars {
                 bar.finish_and_clear();
             }
             // The library's stages count surfels (their direct light),
-            // gathers (at groups of surfels), or one step.
-            let unit = match (stage.starts_with("surfels"), total > 1) {
+            // gathers (at groups of surfels; a total of 0 while their
+            // count is not known yet), or one step.
+            let unit = match (stage.starts_with("surfels"), total != 1) {
                 (true, _) => "surfels",
                 (false, true) => "gathers",
                 (false, false) => "step",

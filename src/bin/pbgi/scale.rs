@@ -90,16 +90,38 @@ pub fn cmd_scale(a: &BenchArgs) -> Res<()> {
         budget = budget.saturating_mul(10);
     }
     let rows: Vec<ScaleRow> = by_triangles.iter().chain(&by_surfels).cloned().collect();
-    let table = format!(
-        "{}\n(wall-clock seconds, {threads} thread(s), {}, one run; peak memory: the process's resident peak over the case)\n\n\
-         Each stage's resident peak (from the stage's start, so with what earlier stages left resident):\n\n{}\n\
-         How each part grows with the surfels of {label}, fitted over the cases from {GROWTH_FROM} surfels up \
-         (least squares of ln cost against ln n; n ln n alone grows as n^1.06–1.09 there):\n\n{}",
+    let mut table = format!(
+        "{}\n(wall-clock seconds, {threads} thread(s), {}, one run; peak memory: the process's resident peak over the case)\n",
         scale_markdown(&rows),
         pbgi::Isa::best(),
-        stage_peaks_markdown(&rows),
-        growth_markdown(&growth(&by_surfels))
     );
+    let peaks = stage_peaks_markdown(&rows);
+    if !peaks.is_empty() {
+        table += &format!(
+            "\nEach stage's resident peak (from the stage's start, so with what earlier stages, and memory \
+             freed but kept by the allocator, left resident):\n\n{peaks}"
+        );
+    }
+    let fitted: Vec<f64> = by_surfels
+        .iter()
+        .filter(|r| r.budget as usize >= GROWTH_FROM)
+        .map(|r| r.surfels as f64)
+        .collect();
+    let growth = growth(&by_surfels);
+    if let (false, Some(lo), Some(hi)) = (
+        growth.is_empty(),
+        fitted.iter().copied().reduce(f64::min),
+        fitted.iter().copied().reduce(f64::max),
+    ) {
+        // d ln(n ln n) / d ln n = 1 + 1/ln n.
+        table += &format!(
+            "\nHow each part grows with the surfels of {label}, fitted over the budgets from {GROWTH_FROM} up \
+             (least squares of ln cost against ln n; n ln n alone grows as n^{:.2}–{:.2} there):\n\n{}",
+            1.0 + 1.0 / hi.ln(),
+            1.0 + 1.0 / lo.ln(),
+            growth_markdown(&growth)
+        );
+    }
     print!("{table}");
     let write = |file: &str, text: &str| {
         let p = a.out.join(file);
