@@ -200,15 +200,26 @@ fn world(frame: &[Vec3; 3], x: f32, y: f32, z: f32) -> Vec3 {
 /// a pixel whose 4 neighbours' centres it misses).
 #[inline(always)]
 fn edge(open: &[f32], n: usize, p: usize) -> bool {
-    let (c, r, v) = (p % n, p / n, open[p]);
-    for rr in r.saturating_sub(1)..(r + 2).min(n) {
-        for cc in c.saturating_sub(1)..(c + 2).min(n) {
+    let ((rows, cols), v) = (around(n, p), open[p]);
+    for rr in rows {
+        for cc in cols.clone() {
             if open[rr * n + cc] != v {
                 return true;
             }
         }
     }
     false
+}
+
+/// The rows and the columns of pixel `p` and its 8 neighbours in the
+/// `n × n` grid.
+#[inline(always)]
+fn around(n: usize, p: usize) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    let (c, r) = (p % n, p / n);
+    (
+        r.saturating_sub(1)..(r + 2).min(n),
+        c.saturating_sub(1)..(c + 2).min(n),
+    )
 }
 
 /// Whether pixel `p`, which differs from a neighbour in `open`, does so
@@ -220,9 +231,9 @@ fn smooth(sight: &[Sight], open: &[f32], n: usize, p: usize) -> bool {
     if matches!(sight[p], Sight::Surface { .. }) {
         return false;
     }
-    let (c, r, v) = (p % n, p / n, open[p]);
-    for rr in r.saturating_sub(1)..(r + 2).min(n) {
-        for cc in c.saturating_sub(1)..(c + 2).min(n) {
+    let ((rows, cols), v) = (around(n, p), open[p]);
+    for rr in rows {
+        for cc in cols.clone() {
             let q = rr * n + cc;
             if open[q] != v && matches!(sight[q], Sight::Surface { .. }) {
                 return false;

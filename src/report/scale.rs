@@ -251,6 +251,8 @@ pub struct Growth {
     pub n_log_n_off: f64,
     /// The cases fitted.
     pub cases: usize,
+    /// The fewest and the most surfels of the cases fitted.
+    pub surfels: (usize, usize),
 }
 
 /// A part's name and how to read its cost off a case.
@@ -301,6 +303,10 @@ pub fn growth(by_surfels: &[ScaleRow]) -> Vec<Growth> {
             exponent: sxy / sxx,
             n_log_n_off: off.exp(),
             cases: points.len(),
+            surfels: (
+                points.iter().map(|p| p.0 as usize).min().unwrap_or(0),
+                points.iter().map(|p| p.0 as usize).max().unwrap_or(0),
+            ),
         });
     }
     out

@@ -102,17 +102,10 @@ pub fn cmd_scale(a: &BenchArgs) -> Res<()> {
              freed but kept by the allocator, left resident):\n\n{peaks}"
         );
     }
-    let fitted: Vec<f64> = by_surfels
-        .iter()
-        .filter(|r| r.budget as usize >= GROWTH_FROM)
-        .map(|r| r.surfels as f64)
-        .collect();
     let growth = growth(&by_surfels);
-    if let (false, Some(lo), Some(hi)) = (
-        growth.is_empty(),
-        fitted.iter().copied().reduce(f64::min),
-        fitted.iter().copied().reduce(f64::max),
-    ) {
+    let fitted = growth.iter().map(|g| g.surfels);
+    if let (Some(lo), Some(hi)) = (fitted.clone().map(|s| s.0).min(), fitted.map(|s| s.1).max()) {
+        let (lo, hi) = (lo as f64, hi as f64);
         // d ln(n ln n) / d ln n = 1 + 1/ln n.
         table += &format!(
             "\nHow each part grows with the surfels of {label}, fitted over the budgets from {GROWTH_FROM} up \
