@@ -31,6 +31,12 @@ impl Rng {
         z
     }
 
+    /// A random digit scramble for [`sobol2`]: 64 random bits.
+    pub(crate) fn scramble(&mut self) -> [u32; 2] {
+        let h = self.next_u64();
+        [h as u32, (h >> 32) as u32]
+    }
+
     /// Uniform in `[0, 1)`.
     pub fn f32(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
@@ -68,44 +74,45 @@ pub(crate) fn sobol2(i: u32, scramble: [u32; 2]) -> (f32, f32) {
     (unit(x ^ scramble[0]), unit(y ^ scramble[1]))
 }
 
-/// The strata of `n` camera samples over a pixel: `(columns, rows)` with
-/// `columns × rows = n`, rows the largest divisor of `n` not above √n, so
-/// every stratum holds one sample (a √n grid rounded up left the last row
-/// short: at 2 spp both samples fell in the pixel's top half, at 32 the
-/// bottom sixth got a third of its share).
-pub(crate) fn strata(n: u32) -> (u32, u32) {
-    let n = n.max(1);
-    let rows = (1..=n.isqrt()).rev().find(|&r| n.is_multiple_of(r)).unwrap_or(1);
-    (n / rows, rows)
-}
-
-/// Camera sample `s` of `spp` in pixel `(x, y)`: a point jittered by `rng`
-/// within its stratum ([`strata`]), on the film. The renderer and the path
-/// tracer sample pixels alike.
+/// Camera sample `s` of pixel `(x, y)` on the film: point `s` of the
+/// pixel's scrambled (0,2)-sequence ([`sobol2`]). A pixel's first 2^m
+/// samples fall one in each elementary interval of area 2^-m: in columns
+/// and rows of 2^m as well as in squares, so an edge along either axis
+/// crosses as many strata as there are samples (a jittered grid of 4 × 2
+/// gives a horizontal edge two). The first samples of an adaptive render
+/// are stratified among themselves and with the rest. The renderer and the
+/// path tracer sample pixels alike.
 #[cfg(feature = "render")]
-pub(crate) fn film_point(x: u32, y: u32, s: u32, spp: u32, rng: &mut Rng) -> (f32, f32) {
-    let (across, down) = strata(spp);
-    let fx = x as f32 + ((s % across) as f32 + rng.f32()) / across as f32;
-    let fy = y as f32 + ((s / across) as f32 + rng.f32()) / down as f32;
-    (fx, fy)
+#[inline]
+pub(crate) fn film_point(x: u32, y: u32, s: u32, scramble: [u32; 2]) -> (f32, f32) {
+    let (u, v) = sobol2(s, scramble);
+    (x as f32 + u, y as f32 + v)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{sobol2, strata};
+    use super::sobol2;
 
-    /// Every sample count tiles the pixel exactly, square where it can.
+    /// A pixel's first 2, 4, …, 32 camera samples lie in the pixel, one in
+    /// each of as many columns and as many rows: an edge along either axis
+    /// meets them all (a jittered 4 × 2 grid puts 8 samples in 2 rows).
+    #[cfg(feature = "render")]
     #[test]
-    fn strata_tile_the_pixel() {
-        assert_eq!(strata(1), (1, 1));
-        assert_eq!(strata(2), (2, 1));
-        assert_eq!(strata(16), (4, 4));
-        assert_eq!(strata(32), (8, 4));
-        assert_eq!(strata(7), (7, 1));
-        for n in 1..300 {
-            let (c, r) = strata(n);
-            assert_eq!(c * r, n);
-            assert!(r <= c);
+    fn a_pixels_first_samples_take_each_row_and_column_once() {
+        for scramble in [[0, 0], [0x9E37_79B9, 0x7F4A_7C15]] {
+            for n in [2u32, 4, 8, 16, 32] {
+                let (mut columns, mut rows) = (vec![0; n as usize], vec![0; n as usize]);
+                for s in 0..n {
+                    let (fx, fy) = super::film_point(3, 5, s, scramble);
+                    assert!((3.0..4.0).contains(&fx) && (5.0..6.0).contains(&fy), "{fx}, {fy}");
+                    columns[((fx - 3.0) * n as f32) as usize] += 1;
+                    rows[((fy - 5.0) * n as f32) as usize] += 1;
+                }
+                assert!(
+                    columns.iter().chain(&rows).all(|&c| c == 1),
+                    "{n}: {columns:?} {rows:?}"
+                );
+            }
         }
     }
 

@@ -1,13 +1,14 @@
-//! Camera samples: each one's ray through its stratum of the pixel, what it
+//! Camera samples: each one's ray through its point of the pixel, what it
 //! hits (the packets of a tile), and which pixels take how many.
 //!
 //! Adaptive camera samples ([`RenderOptions::first_samples`]): every pixel
 //! takes its first samples, and only a pixel whose first samples disagree
 //! (another surface, a step in depth or normal, a hit beside a miss) takes
-//! the rest, up to `spp`. Most of an image's error at a few samples is the
-//! coverage of edges; a pixel inside one surface has its indirect light
-//! from smooth records and its direct light from its light samples, which
-//! more camera samples refine little.
+//! the rest, up to `spp`. On the Cornell box most of the error at a few
+//! samples is the coverage of edges; on the sunlit rooms and the nave a
+//! pixel inside one surface keeps an error that more camera samples refine,
+//! so the render's default stays uniform (docs/lab/cache.md, "Adaptive
+//! camera samples").
 //!
 //! The decision rests on a pixel's own first samples, traced the same way
 //! wherever they are asked for (a tile, a crop, the cache's placing pass,
@@ -60,7 +61,7 @@ impl Frame<'_> {
 
     /// [`packet`](Self::packet) of the pixels `take` marks (all without
     /// it). An adaptive render's first samples are stratified over the
-    /// pixel among themselves, and so are the rest.
+    /// pixel among themselves, and together with the rest.
     pub(crate) fn packet_of(
         &self,
         pixels: &[(u32, u32)],
@@ -74,22 +75,17 @@ impl Frame<'_> {
         // Each of the pixel's stratified samples filters its own share of
         // the pixel: together they cover it without blurring past it.
         let spread = cam.pixel_spread() / (self.opts.spp as f32).sqrt();
-        let (first, spp) = (self.first_samples(), self.opts.spp);
-        let (stratum, strata) = if s < first {
-            (s, first)
-        } else {
-            (s - first, spp - first)
-        };
         let mut points = Vec::with_capacity(pixels.len());
         for (k, &(x, y)) in pixels.iter().enumerate() {
             if take.is_some_and(|t| !t[k]) {
                 continue;
             }
             let pix = y * cam.width + x;
-            let mut rng = Rng::new(
-                self.opts.seed ^ ((pix as u64) << 20 | s as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
-            );
-            let (fx, fy) = film_point(x, y, stratum, strata, &mut rng);
+            // One scramble per pixel: its camera samples are points of one
+            // sequence, so the first ones and all of them are stratified.
+            let scramble =
+                Rng::new(self.opts.seed ^ u64::from(pix).wrapping_mul(0xD1B5_4A32_D192_ED03)).scramble();
+            let (fx, fy) = film_point(x, y, s, scramble);
             let dir = rays.direction(fx, fy);
             match self.tracer.closest(cam.origin, dir, f32::INFINITY) {
                 Some(hit) => {

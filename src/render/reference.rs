@@ -154,9 +154,10 @@ pub fn render_reference(
                     let mut rng = Rng::new(
                         opts.seed ^ ((y as u64) << 32 | x as u64).wrapping_mul(0xA24B_AED4_963E_E407),
                     );
+                    let scramble = rng.scramble();
                     let mut sum = Vec3::ZERO;
                     for s in 0..opts.spp {
-                        let (fx, fy) = film_point(x, y, s, opts.spp, &mut rng);
+                        let (fx, fy) = film_point(x, y, s, scramble);
                         let l = trace_path(
                             scene,
                             &tracer,
