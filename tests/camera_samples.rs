@@ -1,9 +1,10 @@
 //! Adaptive camera samples (`RenderOptions::first_samples`): the pixels on
-//! an edge take the rest of the samples, and a tile decides as the whole
-//! frame does, bit for bit.
+//! an edge, a surface's or a hard shadow's, take the rest of the samples,
+//! and a tile decides as the whole frame does, bit for bit.
 
 use glam::Vec3;
-use pbgi::render::{Crop, Frame, Image, RenderOptions};
+use pbgi::render::{Component, Crop, Frame, Image, RenderOptions};
+use pbgi::scene::Light;
 use pbgi::scene::builtin::cornell_box;
 
 fn options(spp: u32, first_samples: Option<u32>) -> RenderOptions {
@@ -84,4 +85,75 @@ fn an_adaptive_tile_is_its_part_of_the_full_frame_bit_for_bit() {
             );
         }
     }
+}
+
+/// The box lit by a point light under its ceiling instead of its area
+/// light: hard shadows fall across single surfaces (the floor, the walls),
+/// where no material, normal or depth tells their two sides apart, and no
+/// light sample's noise either.
+fn box_under_a_point_light(size: u32) -> pbgi::scene::Scene {
+    let mut scene = cornell_box();
+    (scene.camera.width, scene.camera.height) = (size, size);
+    for m in &mut scene.meshes {
+        m.emission = None;
+    }
+    scene.lights.push(Light::Point {
+        position: Vec3::new(-0.35, 0.8, 0.3),
+        intensity: Vec3::splat(0.6),
+    });
+    scene
+}
+
+#[test]
+fn the_pixels_on_a_hard_shadows_edge_take_the_rest_of_the_samples() {
+    let n = 128usize;
+    let scene = box_under_a_point_light(n as u32);
+    let render = |opts: &RenderOptions| {
+        Frame::prepare(&scene, opts)
+            .unwrap()
+            .render(&|_, _| {})
+            .unwrap()
+            .image
+    };
+    // The shadow's edge: pixels the light leaves dark beside one it
+    // lights, both of one material (the albedo guide pure).
+    let direct = render(&RenderOptions {
+        component: Component::Direct,
+        ..options(64, None)
+    });
+    let guides = Frame::prepare(&scene, &options(64, None)).unwrap().guides();
+    let pure = |i: usize| {
+        scene
+            .materials
+            .iter()
+            .any(|m| guides.albedo.pixels[i].abs_diff_eq(m.albedo, 1e-4))
+    };
+    let edges: Vec<usize> = (0..n * n)
+        .filter(|&i| {
+            let (x, y) = (i % n, i / n);
+            let beside = [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ];
+            pure(i)
+                && beside.into_iter().any(|(a, b)| {
+                    let j = b * n + a;
+                    a < n
+                        && b < n
+                        && pure(j)
+                        && (direct.pixels[i] == Vec3::ZERO) != (direct.pixels[j] == Vec3::ZERO)
+                })
+        })
+        .collect();
+    assert!(edges.len() > 200, "{} pixels on the shadow's edge", edges.len());
+    let truth = render(&options(64, None));
+    let two = rmse(&render(&options(2, None)), &truth, &edges);
+    let sixteen = rmse(&render(&options(16, None)), &truth, &edges);
+    let adaptive = rmse(&render(&options(16, Some(2))), &truth, &edges);
+    assert!(
+        adaptive < 0.5 * two && adaptive < 1.3 * sixteen,
+        "RMSE on the shadow's edge: 2 spp {two:.4}, 16 spp {sixteen:.4}, 2 then 16 {adaptive:.4}"
+    );
 }

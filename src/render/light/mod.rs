@@ -188,6 +188,29 @@ impl Lights {
         }
     }
 
+    /// Which of the first 32 point and directional lights reach `p`
+    /// (normal `n`), a bit each: what one shadow ray each tells, the same
+    /// rays [`reflected`](Self::reflected) casts. Two points whose bits
+    /// differ lie on two sides of a hard shadow's edge.
+    pub(crate) fn delta_lit(&self, tracer: &Tracer, p: Vec3, n: Vec3) -> u32 {
+        let origin = p + n * tracer.epsilon();
+        let mut lit = 0u32;
+        for (i, light) in self.others.iter().take(32).enumerate() {
+            let reaches = match *light {
+                Light::Point { position, .. } => {
+                    let d = position - origin;
+                    let dist = d.length();
+                    dist > 0.0 && n.dot(d) > 0.0 && !tracer.occluded(origin, d / dist, dist)
+                }
+                Light::Directional { direction, .. } => {
+                    n.dot(-direction) > 0.0 && !tracer.occluded(origin, -direction, f32::INFINITY)
+                }
+            };
+            lit |= u32::from(reaches) << i;
+        }
+        lit
+    }
+
     /// Whether the scene has any light at all.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty() && self.others.is_empty()
