@@ -56,33 +56,36 @@ fn the_pixels_on_an_edge_take_the_rest_of_the_samples() {
 
 #[test]
 fn an_adaptive_tile_is_its_part_of_the_full_frame_bit_for_bit() {
-    let mut scene = cornell_box();
-    (scene.camera.width, scene.camera.height) = (96, 96);
-    let full_opts = options(8, Some(2));
-    let full = Frame::prepare(&scene, &full_opts)
-        .unwrap()
-        .render(&|_, _| {})
-        .unwrap()
-        .image;
-    let (x0, y0, x1, y1) = (21, 30, 70, 77);
-    let crop = RenderOptions {
-        crop: Some(Crop { x0, y0, x1, y1 }),
-        ..full_opts
-    };
-    let part = Frame::prepare(&scene, &crop)
-        .unwrap()
-        .render(&|_, _| {})
-        .unwrap()
-        .image;
-    for y in y0..y1 {
-        for x in x0..x1 {
-            let a = full.pixels[(y * 96 + x) as usize];
-            let b = part.pixels[((y - y0) * (x1 - x0) + x - x0) as usize];
-            assert_eq!(
-                a.to_array().map(f32::to_bits),
-                b.to_array().map(f32::to_bits),
-                "pixel ({x}, {y})"
-            );
+    let mut area_lit = cornell_box();
+    (area_lit.camera.width, area_lit.camera.height) = (96, 96);
+    // Under the point light the decision also reads the hard shadows.
+    for scene in [area_lit, box_under_a_point_light(96)] {
+        let full_opts = options(8, Some(2));
+        let full = Frame::prepare(&scene, &full_opts)
+            .unwrap()
+            .render(&|_, _| {})
+            .unwrap()
+            .image;
+        let (x0, y0, x1, y1) = (21, 30, 70, 77);
+        let crop = RenderOptions {
+            crop: Some(Crop { x0, y0, x1, y1 }),
+            ..full_opts
+        };
+        let part = Frame::prepare(&scene, &crop)
+            .unwrap()
+            .render(&|_, _| {})
+            .unwrap()
+            .image;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let a = full.pixels[(y * 96 + x) as usize];
+                let b = part.pixels[((y - y0) * (x1 - x0) + x - x0) as usize];
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits),
+                    "pixel ({x}, {y})"
+                );
+            }
         }
     }
 }

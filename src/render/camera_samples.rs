@@ -5,10 +5,10 @@
 //! takes its first samples, and only a pixel whose first samples disagree
 //! (another surface, a step in depth or normal, a hit beside a miss, the
 //! two sides of a hard shadow, a step in direct light) or differ from a
-//! neighbour's takes the rest, up to `spp`. It reaches uniform sampling's
-//! error with a third to a half of the camera samples, but not yet in less
-//! time, so the render's default stays uniform (docs/lab/cache.md,
-//! "Adaptive camera samples").
+//! neighbour's takes the rest, up to `spp`. In the sunlit rooms and the
+//! nave it reaches uniform sampling's error with a sixth to under half of
+//! the camera samples, but not yet in less time, so the render's default
+//! stays uniform (docs/lab/cache.md, "Adaptive camera samples").
 //!
 //! The decision rests on a pixel's own first samples, traced the same way
 //! wherever they are asked for (a tile, a crop, the cache's placing pass,
@@ -19,6 +19,7 @@
 use glam::Vec3;
 
 use super::frame::{Frame, PacketPoint};
+use super::options::Component;
 use super::shading::shading_point;
 use crate::cache::same_surface;
 use crate::rng::{Rng, film_point, mix};
@@ -40,11 +41,17 @@ impl Frame<'_> {
     /// What sample `pp` saw, its direct light not yet known.
     fn seen(&self, pp: &PacketPoint) -> Seen {
         let sp = &pp.point;
+        // A shadow's edge is no edge in an image without direct light.
+        let direct_shown = !self.opts.ao && self.opts.component != Component::Indirect;
         Seen {
             position: sp.position,
             normal: sp.normal,
             material: sp.material,
-            lit: self.lights.delta_lit(&self.tracer, sp.position, sp.normal),
+            lit: if direct_shown {
+                self.lights.delta_lit(&self.tracer, sp.position, sp.normal)
+            } else {
+                0
+            },
             direct: Vec3::ZERO,
         }
     }
@@ -199,11 +206,12 @@ impl Frame<'_> {
 
 impl Frame<'_> {
     /// Which of `pixels` take the samples past the first: those whose
-    /// first samples (`seen`) disagree, and those that see another surface
-    /// than a pixel beside them (above, below, left, right) does, which
-    /// catches an edge whose first samples fell on one side of it. The
-    /// neighbours outside `pixels` are traced here (their first samples'
-    /// surfaces only), so a tile decides as the whole frame does.
+    /// first samples (`seen`) disagree, and those that see another surface,
+    /// or another set of point and directional lights, than a pixel beside
+    /// them (above, below, left, right) does, which catches an edge whose
+    /// first samples fell on one side of it. The neighbours outside
+    /// `pixels` are traced here (their first samples' surfaces and lights
+    /// only), so a tile decides as the whole frame does.
     fn refine(&self, pixels: &[(u32, u32)], seen: &[Vec<Option<Seen>>], slack: f32) -> Vec<bool> {
         let (w, h) = (self.camera.width, self.camera.height);
         let at = |x: u32, y: u32| pixels.iter().position(|&p| p == (x, y));

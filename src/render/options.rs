@@ -195,8 +195,9 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Adaptive camera samples: this many in every pixel first, and `spp`
     /// only where a pixel's first samples disagree (another surface, a
-    /// step in depth or normal, a hit beside a miss); `None`: `spp` in
-    /// every pixel.
+    /// step in depth or normal, a hit beside a miss, the two sides of a
+    /// hard shadow, a step in direct light) or differ from a neighbour's
+    /// in surface or hard shadow; `None`: `spp` in every pixel.
     pub first_samples: Option<u32>,
     /// Where the indirect light is gathered: at records in world space (the
     /// default), at a sparse, adaptive lattice of pixels, or at every

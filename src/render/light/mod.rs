@@ -188,22 +188,34 @@ impl Lights {
         }
     }
 
-    /// Which of the first 32 point and directional lights reach `p`
-    /// (normal `n`), a bit each: what one shadow ray each tells, the same
-    /// rays [`reflected`](Self::reflected) casts. Two points whose bits
-    /// differ lie on two sides of a hard shadow's edge.
+    /// Which of the first 32 point and directional lights light `p`
+    /// (normal `n`), a bit each: the facing tests and shadow rays of
+    /// [`reflected`](Self::reflected), for the lights that shed any light.
+    /// Two points whose bits differ lie on two sides of a hard shadow's
+    /// edge.
     pub(crate) fn delta_lit(&self, tracer: &Tracer, p: Vec3, n: Vec3) -> u32 {
         let origin = p + n * tracer.epsilon();
         let mut lit = 0u32;
         for (i, light) in self.others.iter().take(32).enumerate() {
             let reaches = match *light {
-                Light::Point { position, .. } => {
+                Light::Point { position, intensity } => {
                     let d = position - origin;
-                    let dist = d.length();
-                    dist > 0.0 && n.dot(d) > 0.0 && !tracer.occluded(origin, d / dist, dist)
+                    let dist2 = d.length_squared();
+                    let dist = dist2.sqrt();
+                    let wi = d / dist;
+                    intensity.max_element() > 0.0
+                        && dist2 > 0.0
+                        && n.dot(wi) > 0.0
+                        && !tracer.occluded(origin, wi, dist)
                 }
-                Light::Directional { direction, .. } => {
-                    n.dot(-direction) > 0.0 && !tracer.occluded(origin, -direction, f32::INFINITY)
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => {
+                    let wi = -direction;
+                    irradiance.max_element() > 0.0
+                        && n.dot(wi) > 0.0
+                        && !tracer.occluded(origin, wi, f32::INFINITY)
                 }
             };
             lit |= u32::from(reaches) << i;
