@@ -33,6 +33,23 @@ fn rmse(image: &Image, truth: &Image, pixels: &[usize]) -> f32 {
     (sum / pixels.len() as f32).sqrt()
 }
 
+/// On `edges`, 2 then 16 samples leave under half of 2 spp's error against
+/// `truth`, and about 16 spp's.
+fn refined_like_sixteen(
+    render: impl Fn(&RenderOptions) -> Image,
+    truth: &Image,
+    edges: &[usize],
+    what: &str,
+) {
+    let two = rmse(&render(&options(2, None)), truth, edges);
+    let sixteen = rmse(&render(&options(16, None)), truth, edges);
+    let adaptive = rmse(&render(&options(16, Some(2))), truth, edges);
+    assert!(
+        adaptive < 0.5 * two && adaptive < 1.3 * sixteen,
+        "RMSE on {what}: 2 spp {two:.4}, 16 spp {sixteen:.4}, 2 then 16 {adaptive:.4}"
+    );
+}
+
 #[test]
 fn the_pixels_on_an_edge_take_the_rest_of_the_samples() {
     let scene = cornell_box();
@@ -45,13 +62,7 @@ fn the_pixels_on_an_edge_take_the_rest_of_the_samples() {
         .filter(|&i| !pure(guides.albedo.pixels[i]))
         .collect();
     assert!(edges.len() > 1000, "{} edge pixels", edges.len());
-    let two = rmse(&render(&options(2, None)), &truth, &edges);
-    let sixteen = rmse(&render(&options(16, None)), &truth, &edges);
-    let adaptive = rmse(&render(&options(16, Some(2))), &truth, &edges);
-    assert!(
-        adaptive < 0.5 * two && adaptive < 1.3 * sixteen,
-        "RMSE on the edges: 2 spp {two:.4}, 16 spp {sixteen:.4}, 2 then 16 {adaptive:.4}"
-    );
+    refined_like_sixteen(render, &truth, &edges, "the edges");
 }
 
 #[test]
@@ -152,11 +163,5 @@ fn the_pixels_on_a_hard_shadows_edge_take_the_rest_of_the_samples() {
         .collect();
     assert!(edges.len() > 200, "{} pixels on the shadow's edge", edges.len());
     let truth = render(&options(64, None));
-    let two = rmse(&render(&options(2, None)), &truth, &edges);
-    let sixteen = rmse(&render(&options(16, None)), &truth, &edges);
-    let adaptive = rmse(&render(&options(16, Some(2))), &truth, &edges);
-    assert!(
-        adaptive < 0.5 * two && adaptive < 1.3 * sixteen,
-        "RMSE on the shadow's edge: 2 spp {two:.4}, 16 spp {sixteen:.4}, 2 then 16 {adaptive:.4}"
-    );
+    refined_like_sixteen(render, &truth, &edges, "the shadow's edge");
 }

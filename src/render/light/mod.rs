@@ -189,38 +189,49 @@ impl Lights {
     }
 
     /// Which of the first 32 point and directional lights light `p`
-    /// (normal `n`), a bit each: the facing tests and shadow rays of
-    /// [`reflected`](Self::reflected), for the lights that shed any light.
-    /// Two points whose bits differ lie on two sides of a hard shadow's
-    /// edge.
+    /// (normal `n`), a bit each: [`arrival`](Self::arrival), as
+    /// [`reflected`](Self::reflected) casts it, for the lights that shed
+    /// any light. Two points whose bits differ lie on two sides of a hard
+    /// shadow's edge.
     pub(crate) fn delta_lit(&self, tracer: &Tracer, p: Vec3, n: Vec3) -> u32 {
         let origin = p + n * tracer.epsilon();
         let mut lit = 0u32;
         for (i, light) in self.others.iter().take(32).enumerate() {
-            let reaches = match *light {
-                Light::Point { position, intensity } => {
-                    let d = position - origin;
-                    let dist2 = d.length_squared();
-                    let dist = dist2.sqrt();
-                    let wi = d / dist;
-                    intensity.max_element() > 0.0
-                        && dist2 > 0.0
-                        && n.dot(wi) > 0.0
-                        && !tracer.occluded(origin, wi, dist)
-                }
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => {
-                    let wi = -direction;
-                    irradiance.max_element() > 0.0
-                        && n.dot(wi) > 0.0
-                        && !tracer.occluded(origin, wi, f32::INFINITY)
-                }
-            };
+            let reaches =
+                Self::arrival(light, tracer, origin, n).is_some_and(|(_, c, _)| c.max_element() > 0.0);
             lit |= u32::from(reaches) << i;
         }
         lit
+    }
+
+    /// What a point or directional light sends to `origin` (normal `n`)
+    /// past its one shadow ray: the direction to it, its intensity or
+    /// irradiance, and the factor (cos θ / d², or cos θ) that makes it
+    /// irradiance; `None` where it faces away or is shadowed.
+    #[inline(always)]
+    fn arrival(light: &Light, tracer: &Tracer, origin: Vec3, n: Vec3) -> Option<(Vec3, Vec3, f32)> {
+        match *light {
+            Light::Point { position, intensity } => {
+                let d = position - origin;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                let wi = d / dist;
+                let cos_r = n.dot(wi);
+                (cos_r > 0.0 && !tracer.occluded(origin, wi, dist)).then_some((wi, intensity, cos_r / dist2))
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => {
+                let wi = -direction;
+                let cos_r = n.dot(wi);
+                (cos_r > 0.0 && !tracer.occluded(origin, wi, f32::INFINITY))
+                    .then_some((wi, irradiance, cos_r))
+            }
+        }
     }
 
     /// Whether the scene has any light at all.
@@ -374,30 +385,8 @@ impl Lights {
             }
         }
         for light in &self.others {
-            match *light {
-                Light::Point { position, intensity } => {
-                    let d = position - origin;
-                    let dist2 = d.length_squared();
-                    if dist2 <= 0.0 {
-                        continue;
-                    }
-                    let dist = dist2.sqrt();
-                    let wi = d / dist;
-                    let cos_r = n.dot(wi);
-                    if cos_r > 0.0 && !tracer.occluded(origin, wi, dist) {
-                        sum += f(wi) * intensity * (cos_r / dist2);
-                    }
-                }
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => {
-                    let wi = -direction;
-                    let cos_r = n.dot(wi);
-                    if cos_r > 0.0 && !tracer.occluded(origin, wi, f32::INFINITY) {
-                        sum += f(wi) * irradiance * cos_r;
-                    }
-                }
+            if let Some((wi, c, k)) = Self::arrival(light, tracer, origin, n) {
+                sum += f(wi) * c * k;
             }
         }
         sum
